@@ -1,0 +1,127 @@
+"""The one table writer: rows of named values out as table, csv, tsv, json, jsonl or markdown.
+
+Rows stream out as they come (csv, tsv, jsonl, and json as a valid array); the aligned human
+``table`` and ``markdown`` are laid out when the table closes. Missing values (``None``, NaN,
+infinities) are empty cells in text formats and ``null`` in JSON.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+from collections.abc import Iterable, Mapping, Sequence
+from typing import IO, Any
+
+FORMATS = ("table", "csv", "tsv", "json", "jsonl", "markdown")
+#: Decimal places of floats in the machine formats and in the human ones.
+MACHINE_DECIMALS = 6
+HUMAN_DECIMALS = 3
+
+
+def format_from_extension(path: str) -> str | None:
+    """The table format a file name asks for (.csv, .tsv, .json, .jsonl, .md), else None."""
+    suffix = path.rsplit(".", 1)[-1].lower() if "." in path else ""
+    return {"csv": "csv", "tsv": "tsv", "json": "json", "jsonl": "jsonl", "md": "markdown"}.get(
+        suffix
+    )
+
+
+def _json_value(value: Any) -> Any:
+    if isinstance(value, float):
+        return round(value, MACHINE_DECIMALS) if math.isfinite(value) else None
+    return value
+
+
+def _text_value(value: Any, decimals: int) -> str:
+    if value is None:
+        return ""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, float):
+        if not math.isfinite(value):
+            return ""
+        text = f"{value:.{decimals}f}"
+        if "." in text:
+            text = text.rstrip("0").rstrip(".")
+        return "0" if text == "-0" else text
+    return str(value)
+
+
+class TableWriter:
+    """Write rows with a fixed list of columns to a text stream in one of :data:`FORMATS`."""
+
+    def __init__(self, stream: IO[str], columns: Sequence[str], fmt: str) -> None:
+        if fmt not in FORMATS:
+            raise ValueError(f"unknown table format {fmt!r}; choose one of {', '.join(FORMATS)}")
+        self.stream = stream
+        self.columns = list(columns)
+        self.fmt = fmt
+        self._rows_written = 0
+        self._buffer: list[list[str]] = []
+        self._csv = None
+        if fmt in ("csv", "tsv"):
+            self._csv = csv.writer(
+                stream, dialect="excel-tab" if fmt == "tsv" else "excel", lineterminator="\n"
+            )
+            self._csv.writerow(self.columns)
+
+    def write_row(self, row: Mapping[str, Any]) -> None:
+        """Write one row; keys not in the columns are ignored, missing ones are empty."""
+        values = [row.get(column) for column in self.columns]
+        if self._csv is not None:
+            self._csv.writerow(_text_value(v, MACHINE_DECIMALS) for v in values)
+        elif self.fmt in ("json", "jsonl"):
+            record = {c: _json_value(v) for c, v in zip(self.columns, values)}
+            text = json.dumps(record, ensure_ascii=False)
+            if self.fmt == "jsonl":
+                self.stream.write(text + "\n")
+            else:
+                self.stream.write(("[\n  " if self._rows_written == 0 else ",\n  ") + text)
+        else:
+            self._buffer.append([_text_value(v, HUMAN_DECIMALS) for v in values])
+        self._rows_written += 1
+        self.stream.flush()
+
+    def write_rows(self, rows: Iterable[Mapping[str, Any]]) -> None:
+        for row in rows:
+            self.write_row(row)
+
+    def close(self) -> None:
+        """Finish the table (close the JSON array, lay out the aligned formats)."""
+        if self.fmt == "json":
+            self.stream.write("[]\n" if self._rows_written == 0 else "\n]\n")
+        elif self.fmt == "table":
+            widths = [
+                max([len(c)] + [len(r[i]) for r in self._buffer])
+                for i, c in enumerate(self.columns)
+            ]
+            lines = [self.columns, *self._buffer]
+            for cells in lines:
+                line = "  ".join(_align(cell, w) for cell, w in zip(cells, widths))
+                self.stream.write(line.rstrip() + "\n")
+        elif self.fmt == "markdown":
+            escaped = [[cell.replace("|", "\\|") for cell in r] for r in self._buffer]
+            self.stream.write("| " + " | ".join(self.columns) + " |\n")
+            self.stream.write("|" + "|".join("---" for _ in self.columns) + "|\n")
+            for cells in escaped:
+                self.stream.write("| " + " | ".join(cells) + " |\n")
+        self.stream.flush()
+
+
+def _align(cell: str, width: int) -> str:
+    """Right-align numbers, left-align text."""
+    try:
+        float(cell)
+    except ValueError:
+        return cell.ljust(width)
+    return cell.rjust(width)
+
+
+def write_table(
+    stream: IO[str], columns: Sequence[str], rows: Iterable[Mapping[str, Any]], fmt: str
+) -> None:
+    """Write all ``rows`` at once."""
+    writer = TableWriter(stream, columns, fmt)
+    writer.write_rows(rows)
+    writer.close()

@@ -1,0 +1,233 @@
+"""``gsrwt params`` through the real command: the thesis's tables, formats, sidecars, errors."""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+
+import pytest
+from click.testing import CliRunner
+from test_geometry import FIG_5_2, TABLE_5_1, TABLE_5_2
+
+from gsrwt_cli.cli import main
+from gsrwt_cli.report import PARAMS_COLUMNS
+
+
+def invoke(*args: str):
+    return CliRunner().invoke(main, list(args))
+
+
+def test_issue_example_json(gsrwt):
+    result = gsrwt("params", "--pan", "15", "--tilt", "30", "--focal", "280", "--format", "json")
+    assert result.returncode == 0, result.stderr
+    (row,) = json.loads(result.stdout)
+    assert list(row) == list(PARAMS_COLUMNS)
+    assert row["delta_deg"] == pytest.approx(28.2, abs=0.05)
+    assert row["a_px"] == pytest.approx(427.5, abs=0.05)
+    assert row["gamma_deg"] == pytest.approx(-24.1, abs=0.05)
+    assert row["vp_x"] == pytest.approx(376.8, abs=0.05)
+    assert row["vp_y"] == pytest.approx(-201.9, abs=0.05)
+    assert row["vp_col"] is None and row["horizon_in_image"] is None  # no size, no pixel frame
+
+
+def write_thesis_sidecar(path):
+    rows = [(pan, tilt) for pan, tilt, *_ in TABLE_5_1] + [FIG_5_2[:2]]
+    rows += [(pan, tilt) for pan, tilt, *_ in TABLE_5_2]
+    lines = ["image,pan,tilt,focal,width,height"]
+    lines += [f"view_{pan}_{tilt}.png,{pan},{tilt},280,320,240" for pan, tilt in rows]
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def test_thesis_tables_through_the_cli(tmp_path, gsrwt):
+    sidecar = write_thesis_sidecar(tmp_path / "thesis.csv")
+    result = gsrwt("params", "--sidecar", str(sidecar), "--format", "json")
+    assert result.returncode == 0, result.stderr
+    rows = {(r["pan_deg"], r["tilt_deg"]): r for r in json.loads(result.stdout)}
+    for pan, tilt, delta, (vp_y, vp_x), a, gamma in TABLE_5_1:
+        row = rows[(pan, tilt)]
+        assert row["delta_deg"] == pytest.approx(delta, abs=1)
+        assert row["a_px"] == pytest.approx(a, abs=1)
+        assert row["gamma_deg"] == pytest.approx(gamma, abs=1)
+        assert (row["vp_y"], row["vp_x"]) == pytest.approx((vp_y, vp_x), abs=2)
+        # Pixel frame: principal point at (159.5, 119.5), x up = -row, y right = +col.
+        assert (row["vp_col"], row["vp_row"]) == pytest.approx((159.5 + vp_y, 119.5 - vp_x), abs=2)
+        assert row["vl_a"] ** 2 + row["vl_b"] ** 2 == pytest.approx(1, abs=1e-5)
+        assert row["vl_a"] * row["vp_col"] + row["vl_b"] * row["vp_row"] + row["vl_c"] == (
+            pytest.approx(0, abs=1e-3)
+        )
+        assert row["horizon_in_image"] is False
+    pan, tilt, (vp_y, vp_x), a = FIG_5_2
+    assert rows[(pan, tilt)]["a_px"] == pytest.approx(a, abs=1)
+    row = rows[(pan, tilt)]
+    assert (row["vp_y"], row["vp_x"]) == pytest.approx((vp_y, vp_x), abs=2)
+    for pan, tilt, theta, foreshortening in TABLE_5_2:
+        assert rows[(pan, tilt)]["theta_deg"] == pytest.approx(theta, abs=0.02)
+        assert rows[(pan, tilt)]["foreshortening"] == pytest.approx(foreshortening, abs=0.01)
+
+
+def test_yaml_mapping_and_list_with_defaults_agree_with_csv(tmp_path):
+    csv_path = write_thesis_sidecar(tmp_path / "thesis.csv")
+    expected = invoke("params", "--sidecar", str(csv_path), "-f", "csv")
+    assert expected.exit_code == 0, expected.output
+    views = [(pan, tilt) for pan, tilt, *_ in TABLE_5_1] + [FIG_5_2[:2]]
+    views += [(pan, tilt) for pan, tilt, *_ in TABLE_5_2]
+    mapping = ["defaults: {focal: 280, width: 320, height: 240}"]
+    mapping += [f"view_{p}_{t}.png: {{pan: {p}, tilt: {t}}}" for p, t in views]
+    (tmp_path / "map.yaml").write_text("\n".join(mapping) + "\n")
+    listing = ["- defaults: {focal: 280, width: 320, height: 240}"]
+    listing += [f"- {{image: view_{p}_{t}.png, pan: {p}, tilt: {t}}}" for p, t in views]
+    (tmp_path / "list.yml").write_text("\n".join(listing) + "\n")
+    for name in ("map.yaml", "list.yml"):
+        result = invoke("params", "--sidecar", str(tmp_path / name), "-f", "csv")
+        assert result.exit_code == 0, result.output
+        assert result.output == expected.output
+
+
+def test_options_fill_what_the_sidecar_leaves_out(tmp_path):
+    (tmp_path / "v.csv").write_text("image,pan,tilt\na.jpg,15,30\n")
+    result = invoke("params", "--sidecar", str(tmp_path / "v.csv"), "--focal", "280", "-f", "jsonl")
+    assert result.exit_code == 0, result.output
+    assert json.loads(result.output)["a_px"] == pytest.approx(427.46, abs=0.01)
+
+
+def test_gsrwt_parameters_as_input_give_back_the_pose(tmp_path):
+    (tmp_path / "v.csv").write_text(
+        "image,delta,a,gamma,focal\nb.jpg,28.186785,427.462305,-24.1,280\n"
+    )
+    result = invoke("params", "--sidecar", str(tmp_path / "v.csv"), "-f", "jsonl")
+    assert result.exit_code == 0, result.output
+    row = json.loads(result.output)
+    assert (row["pan_deg"], row["tilt_deg"]) == pytest.approx((15, 30), abs=1e-5)
+
+
+@pytest.mark.parametrize("fmt", ["csv", "tsv", "json", "jsonl", "markdown", "table"])
+def test_every_format_carries_the_same_values(fmt):
+    result = invoke("params", "--pan", "30", "--tilt", "15", "--focal", "280",
+                    "--width", "320", "--height", "240", "-f", fmt)
+    assert result.exit_code == 0, result.output
+    text = result.output
+    if fmt in ("csv", "tsv"):
+        rows = list(csv.DictReader(io.StringIO(text), delimiter="\t" if fmt == "tsv" else ","))
+        delta, horizon = float(rows[0]["delta_deg"]), rows[0]["horizon_in_image"]
+    elif fmt == "json":
+        rows = json.loads(text)
+        delta, horizon = rows[0]["delta_deg"], rows[0]["horizon_in_image"]
+    elif fmt == "jsonl":
+        rows = [json.loads(line) for line in text.splitlines()]
+        delta, horizon = rows[0]["delta_deg"], rows[0]["horizon_in_image"]
+    else:
+        lines = [line for line in text.splitlines() if not line.startswith("|--")]
+        split = (lambda s: [c.strip() for c in s.strip("|").split("|")]) if fmt == "markdown" \
+            else str.split
+        header, values = split(lines[0]), split(lines[1])
+        # In the aligned table the empty image cell is blank space.
+        cells = dict(zip(header[1:], values)) if fmt == "table" else dict(zip(header, values))
+        delta, horizon = float(cells["delta_deg"]), cells["horizon_in_image"]
+        assert len(lines) == 2
+    assert delta == pytest.approx(65.85, abs=0.01)
+    assert horizon in (False, "false")
+
+
+def test_pipe_defaults_to_csv(gsrwt):
+    result = gsrwt("params", "--pan", "15", "--tilt", "30", "--focal", "280")
+    assert result.returncode == 0
+    assert result.stdout.splitlines()[0] == ",".join(PARAMS_COLUMNS)
+
+
+def test_frontal_view_has_no_vanishing_point():
+    result = invoke("params", "--pan", "0", "--tilt", "0", "--focal", "280",
+                    "--width", "320", "--height", "240", "-f", "json")
+    (row,) = json.loads(result.output)
+    assert row["a_px"] is None and row["vp_x"] is None and row["vl_a"] is None
+    assert row["theta_deg"] == 0 and row["foreshortening"] == 1
+    assert row["horizon_in_image"] is False
+
+
+def test_horizon_in_image_when_the_vanishing_line_crosses_it():
+    result = invoke("params", "--pan", "80", "--tilt", "0", "--focal", "280",
+                    "--width", "320", "--height", "240", "-f", "json")
+    assert json.loads(result.output)[0]["horizon_in_image"] is True
+
+
+BAD_ROWS = [
+    ("a.jpg,15,95,280", "line 2, field 'tilt'", "strictly between -90 and 90"),
+    ("a.jpg,-90,10,280", "line 2, field 'pan'", "strictly between -90 and 90"),
+    ("a.jpg,15,30,-3", "line 2, field 'focal'", "must be positive"),
+    ("a.jpg,15,30,0", "line 2, field 'focal'", "must be positive"),
+    ("a.jpg,abc,30,280", "line 2, field 'pan'", "not a number"),
+    ("a.jpg,nan,30,280", "line 2, field 'pan'", "must be finite"),
+    ("a.jpg,15,inf,280", "line 2, field 'tilt'", "must be finite"),
+    ("a.jpg,15,30,", "line 2: missing field 'focal'", ""),
+]
+
+
+@pytest.mark.parametrize(("row", "where", "what"), BAD_ROWS)
+def test_bad_rows_name_file_row_and_field(tmp_path, gsrwt, row, where, what):
+    sidecar = tmp_path / "views.csv"
+    sidecar.write_text("image,pan,tilt,focal\n" + row + "\n")
+    result = gsrwt("params", "--sidecar", str(sidecar))
+    assert result.returncode == 2
+    assert result.stdout == ""
+    lines = result.stderr.splitlines()
+    assert len(lines) == 1, result.stderr
+    assert lines[0].startswith(f"Error: {sidecar} {where}")
+    assert what in lines[0]
+    assert "Traceback" not in result.stderr
+
+
+def test_every_bad_row_is_reported(tmp_path):
+    sidecar = tmp_path / "views.csv"
+    sidecar.write_text("image,pan,tilt,focal\na,15,95,280\nb,15,30,280\nc,15,30,-3\n")
+    result = CliRunner().invoke(main, ["params", "--sidecar", str(sidecar)])
+    assert result.exit_code == 2
+    lines = result.output.splitlines()
+    assert lines == [
+        f"Error: {sidecar} line 2, field 'tilt': tilt must be strictly between -90 and 90 "
+        "degrees (the camera cannot see the wall otherwise), got 95",
+        f"Error: {sidecar} line 4, field 'focal': focal must be positive, got -3",
+    ]
+
+
+@pytest.mark.parametrize(
+    ("name", "content", "message"),
+    [
+        ("missing.csv", None, "missing.csv: no such file"),
+        ("views.csv", "pan,tilt,focal\n15,30,280\n", "views.csv line 1: missing column 'image'"),
+        ("views.csv", "", "views.csv: empty file"),
+        ("views.yaml", "a.jpg: [1, 2\n", "views.yaml line 2"),
+        ("views.yaml", "- {image: a.jpg, pan: 1, tilt: 2, focal: x}\n",
+         "views.yaml record 1, field 'focal': not a number"),
+        ("views.csv", "image,pan,tilt,focal\na,1,2,280\na,3,4,280\n",
+         "views.csv line 3: image 'a' is already in"),
+        ("views.txt.gz", "x", "unknown sidecar type"),
+    ],
+)
+def test_bad_sidecar_files(tmp_path, gsrwt, name, content, message):
+    path = tmp_path / name
+    if content is not None:
+        path.write_text(content)
+    result = gsrwt("params", "--sidecar", str(path))
+    assert result.returncode == 2
+    assert len(result.stderr.splitlines()) == 1, result.stderr
+    assert message in result.stderr
+    assert "Traceback" not in result.stderr
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["--pan", "15", "--tilt", "30"], "Error: missing option --focal"),
+        (["--pan", "15", "--tilt", "95", "--focal", "280"], "Error: option --tilt: tilt must"),
+        (["--pan", "15", "--tilt", "30", "--focal", "-3"], "Error: option --focal: focal must"),
+        (["--pan", "nan", "--tilt", "30", "--focal", "280"], "Error: option --pan: must be finite"),
+        (["--pan", "x", "--tilt", "30", "--focal", "280"], "'x' is not a valid float"),
+        (["--pan", "1", "--tilt", "30", "--focal", "280", "--cx", "3"], "cx and cy"),
+    ],
+)
+def test_bad_options(gsrwt, args, message):
+    result = gsrwt("params", *args)
+    assert result.returncode == 2
+    assert message in result.stderr
+    assert "Traceback" not in result.stderr
