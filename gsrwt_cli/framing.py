@@ -7,6 +7,8 @@ Pure geometry: no I/O.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from .camera import View
@@ -58,3 +60,138 @@ def output_from_input(
     homography = upright_from_canonical(view, scale, anchor) @ canonical_from_pixel(view)
     principal_w = homography[2] @ np.array([view.cx, view.cy, 1.0])
     return homography / principal_w
+
+
+# --------------------------------------------------------------------------------------------
+# Output frames: which rectangle of the canonical view becomes the output image
+# --------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Frame:
+    """A rectangle of the default frame and a resolution.
+
+    ``x0, y0, x1, y1`` are pixel-edge coordinates of the default frame (frontal resolution,
+    the optical-axis point on the principal point): its pixel ``(col, row)`` covers
+    ``[col, col + 1) x [row, row + 1)``, so the default frame of a ``W x H`` image is
+    ``(0, 0, W, H)``. ``scale`` output pixels per frontal pixel.
+    """
+
+    x0: float
+    y0: float
+    x1: float
+    y1: float
+    scale: float = 1.0
+
+    @property
+    def size(self) -> tuple[int, int]:
+        """Output ``(width, height)`` in pixels."""
+        return (
+            max(0, round(self.scale * (self.x1 - self.x0))),
+            max(0, round(self.scale * (self.y1 - self.y0))),
+        )
+
+    def output_from_default(self) -> Matrix:
+        """Default-frame pixel centres to output pixel centres."""
+        k = self.scale
+        return np.array(
+            [[k, 0.0, k * (0.5 - self.x0) - 0.5], [0.0, k, k * (0.5 - self.y0) - 0.5], [0, 0, 1]]
+        )
+
+
+def default_frame(view: View, scale: float = 1.0) -> Frame:
+    """The thesis's bounding box (Fig. 5.7): the input's size at frontal resolution."""
+    return Frame(0.0, 0.0, float(view.width), float(view.height), scale)
+
+
+def local_stretch(homography: Matrix, points: np.ndarray) -> np.ndarray:
+    """Largest singular value of the homography's Jacobian at ``(N, 2)`` points.
+
+    How many output pixels one input pixel is stretched over, in the direction where that is
+    largest: ``J = (H[:2, :2] - o h^T) / w`` with ``o`` the mapped point and ``h = H[2, :2]``.
+    """
+    h = np.asarray(homography, dtype=np.float64)
+    homogeneous = points @ h[:, :2].T + h[:, 2]
+    w = homogeneous[:, 2]
+    mapped = homogeneous[:, :2] / w[:, None]
+    a = (h[0, 0] - mapped[:, 0] * h[2, 0]) / w
+    b = (h[0, 1] - mapped[:, 0] * h[2, 1]) / w
+    c = (h[1, 0] - mapped[:, 1] * h[2, 0]) / w
+    d = (h[1, 1] - mapped[:, 1] * h[2, 1]) / w
+    squares = a * a + b * b + c * c + d * d
+    determinant = a * d - b * c
+    return np.sqrt((squares + np.sqrt(np.maximum(squares**2 - 4 * determinant**2, 0))) / 2)
+
+
+def full_frame(
+    view: View, max_stretch: float = 4.0, scale: float = 1.0, samples: int = 513
+) -> Frame:
+    """The whole visible wall: the forward-mapped image, cut where it over-magnifies.
+
+    Takes the input pixels on the visible side of the vanishing line whose local stretch
+    (:func:`local_stretch`) is at most ``max_stretch`` times the stretch at the principal
+    point, maps them forward and bounds them (the remedy of Fig. 5.2-5.3). Sampled on a
+    ``samples x samples`` grid over the image, borders included.
+    """
+    homography = output_from_input(view)
+    cols = np.linspace(-0.5, view.width - 0.5, samples)
+    rows = np.linspace(-0.5, view.height - 0.5, samples)
+    grid = np.stack(np.meshgrid(cols, rows), axis=-1).reshape(-1, 2)
+    w = grid @ homography[2, :2] + homography[2, 2]
+    visible = grid[w > 1e-12]
+    reference = local_stretch(homography, np.array([[view.cx, view.cy]]))[0]
+    keep = visible[local_stretch(homography, visible) <= max_stretch * reference]
+    if len(keep) == 0:
+        raise ValueError(
+            f"no part of the image is within --max-stretch {max_stretch:g} "
+            "(the vanishing line covers it); raise --max-stretch or use --bbox frontal"
+        )
+    mapped = map_points(homography, keep)
+    low = np.floor(mapped.min(axis=0) + 0.5)
+    high = np.ceil(mapped.max(axis=0) + 0.5)
+    return Frame(float(low[0]), float(low[1]), float(high[0]), float(high[1]), scale)
+
+
+@dataclass(frozen=True)
+class Plan:
+    """Where one image goes: the frame and the homography from input to output pixels."""
+
+    frame: Frame
+    homography: Matrix
+
+    @property
+    def size(self) -> tuple[int, int]:
+        return self.frame.size
+
+
+def plan_output(
+    view: View,
+    bbox: str | tuple[float, float, float, float] = "frontal",
+    scale: float = 1.0,
+    max_stretch: float = 4.0,
+    max_pixels: float = 50e6,
+) -> Plan:
+    """Choose the output frame (spec section 5) and compose the one pixel homography.
+
+    ``bbox``: ``"frontal"`` (default frame), ``"full"`` (:func:`full_frame`) or an explicit
+    ``(x0, y0, x1, y1)`` in default-frame pixel edges. Raises ``ValueError`` for an empty
+    output or one larger than ``max_pixels``.
+    """
+    if view.width is None or view.height is None:
+        raise ValueError("the image size is needed to frame the output")
+    if bbox == "frontal":
+        frame = default_frame(view, scale)
+    elif bbox == "full":
+        frame = full_frame(view, max_stretch, scale)
+    else:
+        frame = Frame(*(float(v) for v in bbox), scale=scale)
+    width, height = frame.size
+    if width < 1 or height < 1:
+        raise ValueError(f"the output would be empty ({width}x{height} pixels)")
+    if width * height > max_pixels:
+        raise ValueError(
+            f"the output would be {width}x{height} = {width * height / 1e6:.1f} megapixels, "
+            f"above --max-pixels {max_pixels / 1e6:g} megapixels; use --bbox frontal, a "
+            "smaller --scale, a lower --max-stretch or a higher --max-pixels"
+        )
+    return Plan(frame, frame.output_from_default() @ output_from_input(view))

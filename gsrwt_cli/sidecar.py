@@ -59,11 +59,33 @@ class Record:
     where: str
     defaults: Mapping[str, Any] = field(default_factory=dict)
 
+    def merged(self, fallback: Mapping[str, Any] | None = None) -> dict[str, Any]:
+        """The record's values over its file's defaults over ``fallback``."""
+        return merge_values(self.values, self.defaults, fallback or {})
+
     def view(self, fallback: Mapping[str, Any] | None = None) -> View:
         """Validate into a :class:`View`; ``fallback`` fills what record and defaults leave out."""
-        return view_from_values(
-            {**(fallback or {}), **self.defaults, **self.values}, self.where, set(self.values)
-        )
+        return view_from_values(self.merged(fallback), self.where)
+
+
+def merge_values(own: Mapping[str, Any], *fallbacks: Mapping[str, Any]) -> dict[str, Any]:
+    """``own`` values over the ``fallbacks`` (earlier ones win over later ones).
+
+    A record that gives the pose as the GS-RWT's ``delta``/``a`` takes no pan or tilt from
+    the fallbacks, and one that gives pan/tilt takes no ``delta``, ``a`` or ``gamma``.
+    """
+    merged: dict[str, Any] = {}
+    for fallback in reversed(fallbacks):
+        merged.update(fallback)
+    own_keys = {k for k, v in own.items() if v is not None and v != ""}
+    if own_keys & {"delta", "a"} and not own_keys & {"pan", "tilt"}:
+        merged.pop("pan", None)
+        merged.pop("tilt", None)
+    elif own_keys & {"pan", "tilt"}:
+        for name in GSRWT_FIELDS:
+            merged.pop(name, None)
+    merged.update(own)
+    return merged
 
 
 def _number(where: str, name: str, raw: Any) -> float:
@@ -78,24 +100,22 @@ def _number(where: str, name: str, raw: Any) -> float:
     return value
 
 
-def view_from_values(
-    values: Mapping[str, Any], where: str, own_fields: set[str] | None = None
-) -> View:
+def view_from_values(values: Mapping[str, Any], where: str) -> View:
     """Build a :class:`View` from raw values (numbers or numeric strings), naming what is wrong.
 
-    When ``delta`` or ``a`` is given and pan/tilt are not among ``own_fields`` (the record's
-    own keys, as opposed to defaults), the pose comes from the GS-RWT parameters
-    (:func:`~gsrwt_cli.geometry.pan_tilt_from_gsrwt`); a given ``gamma`` must agree with them
-    within :data:`GAMMA_TOLERANCE_DEG`.
+    When ``delta`` and ``a`` are given instead of pan and tilt, the pose comes from the GS-RWT
+    parameters (:func:`~gsrwt_cli.geometry.pan_tilt_from_gsrwt`); a given ``gamma`` must
+    agree with them within :data:`GAMMA_TOLERANCE_DEG`.
     """
-    own = set(values) if own_fields is None else own_fields
     numbers = {
         name: _number(where, name, values[name])
         for name in NUMERIC_FIELDS
         if values.get(name) is not None and values.get(name) != ""
     }
-    uses_gsrwt = bool(own & set(GSRWT_FIELDS)) and not own & {"pan", "tilt"}
-    if uses_gsrwt:
+    given = set(numbers)
+    if given & {"pan", "tilt"} and given & {"delta", "a"}:
+        raise RecordError(where, None, "give pan and tilt, or delta and a, not both")
+    if given & {"delta", "a"}:
         for name in ("delta", "a", "focal"):
             if name not in numbers:
                 reason = f"missing field '{name}' (needed with delta, a, gamma)"

@@ -66,3 +66,104 @@ def run_gsrwt(*args: str, stdin: str | None = None, cwd: Path | None = None):
 @pytest.fixture
 def gsrwt():
     return run_gsrwt
+
+
+def smooth_texture(height: int, width: int, seed: int = 0, channels: int = 3) -> np.ndarray:
+    """A textured 8-bit image: luminance detail a few pixels wide, colour that varies slowly.
+
+    Like photographs (and unlike colour noise) it survives JPEG's chroma subsampling.
+    """
+    import cv2
+
+    rng = np.random.default_rng(seed)
+
+    def noise(step: int, sigma: float, depth: int = 1) -> np.ndarray:
+        shape = (height // step + 2, width // step + 2) + ((depth,) if depth > 1 else ())
+        field = cv2.resize(rng.uniform(-1, 1, shape).astype(np.float32), (width, height),
+                           interpolation=cv2.INTER_CUBIC)
+        return cv2.GaussianBlur(field, (0, 0), sigma)
+
+    luminance = 128 + 110 * noise(6, 1.5)
+    if channels == 1:
+        return np.clip(luminance, 0, 255).astype(np.uint8)
+    colour = luminance[..., None] + 40 * noise(24, 4, channels)
+    return np.clip(colour, 0, 255).astype(np.uint8)
+
+
+def wall_from_texture_pixels(cols, rows, texture_shape, centre, distance, focal):
+    """Wall ``(X, Y)`` of texture pixels; the texture's centre sits at wall point ``centre``.
+
+    One texture pixel is ``distance / focal`` wall units (frontal resolution).
+    """
+    height, width = texture_shape[:2]
+    unit = distance / focal
+    x = centre[0] + ((height - 1) / 2 - rows) * unit
+    y = centre[1] + (cols - (width - 1) / 2) * unit
+    return x, y
+
+
+def render_view(texture, pan, tilt, focal, width, height, cx, cy, distance=10.0, centre=None):
+    """What a pinhole camera sees of a wall covered by ``texture`` (independent of gsrwt).
+
+    Casts the ray of every camera pixel with :func:`camera_axes`, meets the wall ``Z =
+    distance`` and samples the texture there (bilinear). ``centre``: the wall point under the
+    texture's centre (default: where the optical axis meets the wall). Returns the image and
+    a mask of pixels that saw the texture.
+    """
+    import cv2
+
+    axes = camera_axes(pan, tilt)
+    if centre is None:
+        centre = distance * axes[2][:2] / axes[2][2]
+    cols, rows = np.meshgrid(np.arange(width, dtype=float), np.arange(height, dtype=float))
+    x, y = cy - rows, cols - cx
+    rays = x[..., None] * axes[0] + y[..., None] * axes[1] + focal * axes[2]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = distance / rays[..., 2]
+        wall_x, wall_y = t * rays[..., 0], t * rays[..., 1]
+    th, tw = texture.shape[:2]
+    unit = distance / focal
+    tex_col = (wall_y - centre[1]) / unit + (tw - 1) / 2
+    tex_row = (th - 1) / 2 - (wall_x - centre[0]) / unit
+    valid = (rays[..., 2] > 0) & (tex_col >= 0) & (tex_col <= tw - 1) & (tex_row >= 0)
+    valid &= tex_row <= th - 1
+    map_x = np.where(valid, tex_col, -10).astype(np.float32)
+    map_y = np.where(valid, tex_row, -10).astype(np.float32)
+    image = cv2.remap(texture, map_x, map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT)
+    return image, valid, centre
+
+
+def expected_rectified(texture, pan, tilt, focal, width, height, cx, cy, distance, centre,
+                       margin=2):
+    """The frontal view gsrwt should produce (default frame) and the mask the camera saw.
+
+    Output pixel ``(col, row)`` shows the wall point ``A + ((cy - row), (col - cx)) Zc/f`` with
+    ``A`` where the optical axis meets the wall (Fig. 5.7); it counts when its projection
+    lands at least ``margin`` pixels inside the camera image and on the texture.
+    """
+    import cv2
+
+    axes = camera_axes(pan, tilt)
+    axis_point = distance * axes[2][:2] / axes[2][2]
+    unit = distance / focal
+    cols, rows = np.meshgrid(np.arange(width, dtype=float), np.arange(height, dtype=float))
+    wall = np.stack([axis_point[0] + (cy - rows) * unit, axis_point[1] + (cols - cx) * unit], -1)
+    pixels, depth = project_wall_points(wall.reshape(-1, 2), distance, pan, tilt, focal, cx, cy)
+    pixels = pixels.reshape(height, width, 2)
+    seen = (depth.reshape(height, width) > 0) & (pixels[..., 0] >= margin)
+    seen &= (pixels[..., 0] <= width - 1 - margin) & (pixels[..., 1] >= margin)
+    seen &= pixels[..., 1] <= height - 1 - margin
+    th, tw = texture.shape[:2]
+    tex_col = (wall[..., 1] - centre[1]) / unit + (tw - 1) / 2
+    tex_row = (th - 1) / 2 - (wall[..., 0] - centre[0]) / unit
+    seen &= (tex_col >= margin) & (tex_col <= tw - 1 - margin) & (tex_row >= margin)
+    seen &= tex_row <= th - 1 - margin
+    expected = cv2.remap(texture, tex_col.astype(np.float32), tex_row.astype(np.float32),
+                         cv2.INTER_LINEAR)
+    return expected, seen
+
+
+def psnr(a: np.ndarray, b: np.ndarray, mask: np.ndarray) -> float:
+    diff = a.astype(float)[mask] - b.astype(float)[mask]
+    mse = float(np.mean(diff**2))
+    return math.inf if mse == 0 else 10 * math.log10(255.0**2 / mse)

@@ -6,6 +6,7 @@ import click
 
 from .. import __version__
 from .params import params
+from .rectify import rectify
 
 
 class GsrwtGroup(click.Group):
@@ -43,3 +44,4 @@ def main(ctx: click.Context, debug: bool) -> None:
 
 
 main.add_command(params)
+main.add_command(rectify)

@@ -1,0 +1,323 @@
+"""Batches: find the images, match their parameters, rectify them in worker processes.
+
+Each image becomes a :class:`Job` in the main process (cheap: paths and parameter values),
+and a table row in a worker (read, warp, write atomically). Only one image per worker is in
+memory at a time; rows come back in input order.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import os
+from collections.abc import Callable, Iterable, Iterator
+from dataclasses import dataclass, field
+from pathlib import Path, PurePosixPath
+from typing import Any
+
+import cv2
+import yaml
+
+from .camera import View
+from .imaging import (
+    IMAGE_EXTENSIONS,
+    ImageError,
+    Workspace,
+    check_writable,
+    encode_image,
+    read_image,
+    write_atomic,
+)
+from .rectify import plan_image, rectify_image
+from .report import PARAMS_COLUMNS, params_row
+from .sidecar import RecordError, Sidecar, merge_values, view_from_values
+
+RECTIFY_COLUMNS = (
+    *PARAMS_COLUMNS,
+    "output",
+    "out_width",
+    "out_height",
+    "homography",
+    "status",
+    "error",
+)
+
+
+@dataclass(frozen=True)
+class Source:
+    """An input image and the relative path its output keeps."""
+
+    path: Path
+    relative: PurePosixPath
+
+
+def is_image_name(path: Path) -> bool:
+    return path.suffix.lower() in IMAGE_EXTENSIONS and not path.name.startswith(".")
+
+
+def sources_from_directory(directory: Path, recursive: bool) -> list[Source]:
+    """Images in a directory (sorted), with paths relative to it; hidden files are skipped."""
+    if recursive:
+        found = []
+        for root, dirs, files in os.walk(directory):
+            dirs[:] = sorted(d for d in dirs if not d.startswith("."))
+            found += [Path(root) / name for name in sorted(files)]
+    else:
+        found = sorted(p for p in directory.iterdir() if p.is_file())
+    return [
+        Source(p, PurePosixPath(p.relative_to(directory).as_posix()))
+        for p in found
+        if is_image_name(p)
+    ]
+
+
+def source_from_listed_path(text: str) -> Source:
+    """A path read from standard input: relative paths keep their tree, others their name."""
+    path = Path(text)
+    pure = PurePosixPath(path.as_posix())
+    if path.is_absolute() or ".." in pure.parts:
+        return Source(path, PurePosixPath(path.name))
+    return Source(path, PurePosixPath(*[part for part in pure.parts if part != "."]))
+
+
+# --------------------------------------------------------------------------------------------
+# Jobs: one per image, with its parameters found in the main process
+# --------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Job:
+    """Everything a worker needs for one image (picklable, small)."""
+
+    source: Path
+    output: Path
+    values: dict[str, Any] | None  # raw parameters from the first source that has them
+    where: str  # where the parameters came from, for messages
+    error: str | None = None  # known before reading the image
+
+
+@dataclass(frozen=True)
+class Settings:
+    """The options of one ``gsrwt rectify`` run, shared by all workers."""
+
+    bbox: str | tuple[float, float, float, float] = "frontal"
+    scale: float = 1.0
+    px_per_unit: float | None = None
+    max_stretch: float = 4.0
+    max_pixels: float = 50e6
+    interpolation: str = "linear"
+    fill: float = 0.0
+    alpha: bool = False
+    quality: int = 95
+    overwrite: bool = False
+    dry_run: bool = False
+    threads_per_worker: int = 0  # 0: OpenCV's default
+
+
+def adjacent_yaml(image: Path) -> Path | None:
+    """``NAME.yaml`` or ``NAME.EXT.yaml`` (or ``.yml``) beside the image, if present."""
+    for candidate in (
+        image.with_suffix(".yaml"),
+        image.with_name(image.name + ".yaml"),
+        image.with_suffix(".yml"),
+        image.with_name(image.name + ".yml"),
+    ):
+        if candidate.is_file():
+            return candidate
+    return None
+
+
+def parameters_for(
+    source: Source, sidecar: Sidecar | None, fallback: dict[str, Any]
+) -> tuple[dict[str, Any] | None, str, str | None]:
+    """(values, where, error) for an image: sidecar row, then adjacent YAML, then options.
+
+    The first source that has the image wins; fields it leaves out come from its defaults
+    and then from the command-line options.
+    """
+    if sidecar is not None:
+        record = sidecar.find(source.relative.as_posix())
+        if record is not None:
+            return record.merged(fallback), record.where, None
+    beside = adjacent_yaml(source.path)
+    if beside is not None:
+        try:
+            data = yaml.safe_load(beside.read_text(encoding="utf-8"))
+        except (OSError, UnicodeDecodeError, yaml.YAMLError) as error:
+            return None, str(beside), f"{beside}: cannot read parameters ({error})"
+        if not isinstance(data, dict):
+            return None, str(beside), f"{beside}: expected a mapping of field to value"
+        values = {str(k).strip().lower(): v for k, v in data.items() if v is not None}
+        return merge_values(values, fallback), str(beside), None
+    if {"pan", "tilt", "focal"} <= set(fallback):
+        return dict(fallback), "options", None
+    places = []
+    if sidecar is not None:
+        places.append(f"not in {sidecar.path}")
+    places.append(f"no {source.path.stem}.yaml beside it")
+    places.append("no --pan/--tilt/--focal")
+    return None, "", "no parameters: " + ", ".join(places)
+
+
+def plan_jobs(
+    sources: Iterable[Source],
+    outdir: Path,
+    sidecar: Sidecar | None,
+    fallback: dict[str, Any],
+    extension: str | None,
+) -> list[Job]:
+    """One job per source; outputs mirror relative paths under ``outdir``."""
+    jobs = []
+    claimed: dict[Path, Path] = {}
+    for source in sources:
+        relative = Path(*source.relative.parts)
+        if extension is not None:
+            relative = relative.with_suffix(extension)
+        output = outdir / relative
+        values, where, error = parameters_for(source, sidecar, fallback)
+        if output in claimed:
+            error = f"its output {output} is also the output of {claimed[output]}"
+        claimed.setdefault(output, source.path)
+        jobs.append(Job(source.path, output, values, where, error))
+    return jobs
+
+
+# --------------------------------------------------------------------------------------------
+# Workers
+# --------------------------------------------------------------------------------------------
+
+_settings = Settings()
+_workspace = Workspace()
+
+
+def _init_worker(settings: Settings) -> None:
+    global _settings, _workspace
+    _settings, _workspace = settings, Workspace()
+    if settings.threads_per_worker:
+        cv2.setNumThreads(settings.threads_per_worker)
+
+
+def _homography_text(matrix) -> str:
+    return " ".join(f"{value:.12g}" for value in matrix.ravel())
+
+
+def process_job(job: Job, settings: Settings | None = None) -> dict[str, Any]:
+    """Rectify one image and return its table row; never raises for a bad image."""
+    settings = settings or _settings
+    row: dict[str, Any] = {"image": str(job.source), "output": str(job.output)}
+    view: View | None = None
+    try:
+        if job.error is not None:
+            raise _JobError(job.error)
+        assert job.values is not None
+        try:
+            view = view_from_values(job.values, job.where)
+        except RecordError as error:
+            raise _JobError(str(error)) from None
+        row.update(params_row(view, str(job.source)))
+        if job.output.exists() and not settings.overwrite:
+            row["status"] = "skipped"
+            return row
+        if not job.source.is_file():
+            raise _JobError("no such file" if not job.source.exists() else "not a file")
+        image = read_image(job.source)
+        channels = 1 if image.ndim == 2 else image.shape[2]
+        check_writable(
+            job.output.suffix, image.dtype, 4 if settings.alpha and channels in (1, 3) else channels
+        )
+        kwargs = dict(
+            bbox=settings.bbox,
+            scale=settings.scale,
+            px_per_unit=settings.px_per_unit,
+            max_stretch=settings.max_stretch,
+            max_pixels=settings.max_pixels,
+        )
+        if settings.dry_run:
+            info = plan_image(view, image.shape[1], image.shape[0], **kwargs)
+        else:
+            output, info = rectify_image(
+                image,
+                view,
+                interpolation=settings.interpolation,
+                fill=settings.fill,
+                alpha=settings.alpha,
+                workspace=_workspace,
+                **kwargs,
+            )
+            del image
+            data = encode_image(output, job.output.suffix, settings.quality)
+            del output
+            write_atomic(job.output, data)
+        row.update(params_row(info.view, str(job.source)))
+        row.update(
+            out_width=info.size[0],
+            out_height=info.size[1],
+            homography=_homography_text(info.homography),
+            status="ok",
+        )
+    except (_JobError, ImageError, ValueError, OSError) as error:
+        row.update(status="error", error=_one_line(error))
+    return row
+
+
+class _JobError(Exception):
+    pass
+
+
+def _one_line(error: BaseException) -> str:
+    if isinstance(error, OSError) and error.strerror:
+        text = error.strerror + (f": {error.filename}" if error.filename else "")
+    else:
+        text = str(error)
+    return " ".join(text.split())
+
+
+def run_jobs(
+    jobs: list[Job], settings: Settings, processes: int
+) -> Iterator[dict[str, Any]]:
+    """Rows of all jobs, in job order, computed by ``processes`` worker processes."""
+    processes = max(1, min(processes, len(jobs)))
+    if processes == 1:
+        _init_worker(settings)
+        for job in jobs:
+            yield process_job(job, settings)
+        return
+    context = multiprocessing.get_context("spawn")
+    threads = Settings(**{**settings.__dict__, "threads_per_worker": 1})
+    with context.Pool(processes, initializer=_init_worker, initargs=(threads,)) as pool:
+        try:
+            yield from pool.imap(process_job, jobs, chunksize=1)
+        except BaseException:
+            pool.terminate()
+            raise
+
+
+@dataclass
+class Counts:
+    ok: int = 0
+    skipped: int = 0
+    failed: int = 0
+    failures: list[str] = field(default_factory=list)
+
+    def add(self, row: dict[str, Any]) -> None:
+        if row["status"] == "ok":
+            self.ok += 1
+        elif row["status"] == "skipped":
+            self.skipped += 1
+        else:
+            self.failed += 1
+            self.failures.append(row["image"])
+
+
+def run_batch(
+    jobs: list[Job],
+    settings: Settings,
+    processes: int,
+    on_row: Callable[[dict[str, Any]], None],
+) -> Counts:
+    """Run all jobs, handing each row to ``on_row`` as it completes; returns the counts."""
+    counts = Counts()
+    for row in run_jobs(jobs, settings, processes):
+        counts.add(row)
+        on_row(row)
+    return counts
+

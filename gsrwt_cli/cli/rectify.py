@@ -1,0 +1,274 @@
+"""``gsrwt rectify``: canonical frontal views of whole directories, and a table of what was done."""
+
+from __future__ import annotations
+
+import contextlib
+import math
+import os
+import sys
+import tempfile
+from collections.abc import Iterator
+from pathlib import Path, PurePosixPath
+from typing import IO, Any
+
+import click
+from tqdm import tqdm
+
+from ..batch import (
+    RECTIFY_COLUMNS,
+    Settings,
+    Source,
+    plan_jobs,
+    run_batch,
+    source_from_listed_path,
+    sources_from_directory,
+)
+from ..imaging import INTERPOLATIONS, ImageError, canonical_extension, check_writable
+from ..sidecar import SidecarError, load_sidecar
+from ..tables import TableWriter, format_from_extension
+from .options import InputError, view_defaults, view_options
+
+
+def parse_bbox(text: str) -> str | tuple[float, float, float, float]:
+    """``frontal``, ``full`` or ``X0,Y0,X1,Y1`` (default-frame pixels, X1 > X0, Y1 > Y0)."""
+    if text in ("frontal", "full"):
+        return text
+    parts = text.split(",")
+    try:
+        box = tuple(float(p) for p in parts)
+    except ValueError:
+        box = ()
+    if len(box) != 4 or not all(math.isfinite(v) for v in box):
+        raise click.BadParameter(
+            f"expected frontal, full or X0,Y0,X1,Y1 (four numbers), got {text!r}",
+            param_hint="'--bbox'",
+        )
+    if box[2] <= box[0] or box[3] <= box[1]:
+        raise click.BadParameter(f"X1 must exceed X0 and Y1 must exceed Y0, got {text}",
+                                 param_hint="'--bbox'")
+    return box  # type: ignore[return-value]
+
+
+def parse_pixel_count(text: str) -> float:
+    """``50M``, ``2.5e6`` or ``800K`` pixels."""
+    factor = {"k": 1e3, "m": 1e6, "g": 1e9}.get(text[-1:].lower(), 1.0)
+    number = text[:-1] if factor != 1.0 else text
+    try:
+        value = float(number) * factor
+    except ValueError:
+        value = math.nan
+    if not math.isfinite(value) or value < 1:
+        raise click.BadParameter(f"expected a pixel count such as 50M, got {text!r}",
+                                 param_hint="'--max-pixels'")
+    return value
+
+
+def positive(name: str, value: float | None) -> None:
+    if value is not None and not (math.isfinite(value) and value > 0):
+        raise click.BadParameter(f"must be a positive number, got {value:g}",
+                                 param_hint=f"'{name}'")
+
+
+def collect_sources(inputs: tuple[str, ...], recursive: bool) -> list[Source]:
+    """Image files, directories and ``-`` (paths on standard input) to sources."""
+    sources: list[Source] = []
+    for text in inputs:
+        if text == "-":
+            lines = click.get_text_stream("stdin").read().splitlines()
+            sources += [source_from_listed_path(line.strip()) for line in lines if line.strip()]
+            continue
+        path = Path(text)
+        if path.is_dir():
+            sources += sources_from_directory(path, recursive)
+        elif path.exists():
+            sources.append(Source(path, PurePosixPath(path.name)))
+        else:
+            raise InputError(f"{text}: no such file or directory")
+    return sources
+
+
+def refuse_unsafe_outputs(
+    inputs: tuple[str, ...], sources: list[Source], outputs: list[Path], outdir: Path,
+    recursive: bool, table: Path | None, sidecar: Path | None,
+) -> None:
+    """Refuse, before writing anything, a run that could overwrite what the user gave us."""
+    if outdir.exists() and not outdir.is_dir():
+        raise InputError(f"-o {outdir}: exists and is not a directory")
+    given = {os.path.realpath(s.path) for s in sources}
+    for source, output in zip(sources, outputs):
+        if os.path.realpath(output) in given:
+            raise InputError(
+                f"-o {outdir}: output {output} would overwrite the input {source.path}; "
+                "choose another output directory"
+            )
+    if recursive:
+        real_outdir = os.path.realpath(outdir)
+        for text in inputs:
+            if text != "-" and Path(text).is_dir():
+                real_input = os.path.realpath(text)
+                if real_outdir == real_input or real_outdir.startswith(real_input + os.sep):
+                    raise InputError(
+                        f"-o {outdir}: is inside the input directory {text}, where a later "
+                        "--recursive run would take outputs for inputs; choose another"
+                    )
+    if table is not None:
+        protected = given | ({os.path.realpath(sidecar)} if sidecar else set())
+        if os.path.realpath(table) in protected:
+            raise InputError(f"--table {table}: would overwrite an input; choose another path")
+
+
+@contextlib.contextmanager
+def open_table(path: str) -> Iterator[IO[str]]:
+    """The table's stream: stdout for ``-``, else a temporary file renamed into place at the end."""
+    if path == "-":
+        yield sys.stdout
+        return
+    target = Path(path)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    descriptor, temporary = tempfile.mkstemp(
+        dir=target.parent, prefix=f".{target.name}.", suffix=".part"
+    )
+    try:
+        with os.fdopen(descriptor, "w", encoding="utf-8", newline="") as stream:
+            yield stream
+        os.chmod(temporary, 0o644)
+        os.replace(temporary, target)
+    finally:
+        if os.path.exists(temporary):
+            os.unlink(temporary)
+
+
+@click.command()
+@click.argument("inputs", nargs=-1, required=True, metavar="INPUT...")
+@click.option("-o", "--output", "outdir", required=True, type=click.Path(path_type=Path),
+              help="Output directory (created if needed).")
+@click.option("-r", "--recursive", is_flag=True,
+              help="Descend into directories and mirror their tree under OUTDIR.")
+@click.option("--sidecar", type=click.Path(path_type=Path, dir_okay=False),
+              help="CSV or YAML of per-image parameters (rows match by relative path or name).")
+@view_options
+@click.option("--bbox", default="frontal", show_default=True,
+              help="Output extent: frontal (the thesis's box, the input's size), full (the "
+                   "visible wall, up to --max-stretch) or X0,Y0,X1,Y1 in default-frame pixels.")
+@click.option("--max-stretch", type=float, default=4.0, show_default=True,
+              help="With --bbox full: stop where the image is magnified more than this many "
+                   "times the magnification at its centre.")
+@click.option("--scale", type=float, default=None,
+              help="Output pixels per frontal pixel [default: 1].")
+@click.option("--px-per-unit", type=float, default=None,
+              help="Metric output: pixels per unit of the image's 'distance'.")
+@click.option("--max-pixels", default="50M", show_default=True,
+              help="Refuse an output image larger than this (e.g. 50M, 2e7).")
+@click.option("--interpolation", type=click.Choice(tuple(INTERPOLATIONS)), default="linear",
+              show_default=True)
+@click.option("--fill", type=float, default=0.0, show_default=True,
+              help="Value of pixels with no source, in the image's units (0-255, 0-65535).")
+@click.option("--alpha", is_flag=True,
+              help="Make pixels with no source transparent (adds an alpha channel).")
+@click.option("--ext", default=None,
+              help="Write this format (jpg, png, tif, webp, bmp) [default: the input's].")
+@click.option("--quality", type=click.IntRange(1, 100), default=95, show_default=True,
+              help="JPEG and WebP quality.")
+@click.option("--table", "table_path", default=None,
+              help="Where to write the table (.csv, .tsv, .json, .jsonl; - for stdout) "
+                   "[default: OUTDIR/gsrwt.csv].")
+@click.option("-j", "--jobs", type=click.IntRange(min=1), default=None,
+              help="Worker processes [default: all cores].")
+@click.option("--overwrite", is_flag=True, help="Replace existing outputs instead of skipping.")
+@click.option("--dry-run", is_flag=True, help="Check everything and write the table only.")
+@click.option("-q", "--quiet", is_flag=True, help="No progress bar and no summary.")
+def rectify(
+    inputs: tuple[str, ...], outdir: Path, recursive: bool, sidecar: Path | None, bbox: str,
+    max_stretch: float, scale: float | None, px_per_unit: float | None, max_pixels: str,
+    interpolation: str, fill: float, alpha: bool, ext: str | None, quality: int,
+    table_path: str | None, jobs: int | None, overwrite: bool, dry_run: bool, quiet: bool,
+    **view_kwargs: Any,
+) -> None:
+    """Rectify images into canonical frontal views of the wall they show (GS-RWT).
+
+    INPUT is an image, a directory of images, or - to read paths from standard input.
+    Parameters per image come from the first of: a row of --sidecar, a NAME.yaml beside
+    the image, the --pan/--tilt/--focal options. Existing outputs are skipped (rerun to
+    resume); every output is written whole or not at all. Exit code 1 if any image failed.
+
+    \b
+    Examples:
+      gsrwt rectify sample_data --sidecar sample_data/views.csv -o rectified
+      find . -name '*.jpg' | gsrwt rectify - --pan 15 --tilt 30 --focal 2800 -o out
+    """
+    box = parse_bbox(bbox)
+    positive("--max-stretch", max_stretch)
+    positive("--scale", scale)
+    positive("--px-per-unit", px_per_unit)
+    if scale is not None and px_per_unit is not None:
+        raise click.UsageError("use either --scale or --px-per-unit, not both")
+    if not math.isfinite(fill):
+        raise click.BadParameter(f"must be a finite number, got {fill}", param_hint="'--fill'")
+    pixel_limit = parse_pixel_count(max_pixels)
+    extension = None
+    if ext is not None:
+        extension = canonical_extension(ext)
+        try:
+            check_writable(extension, "uint8", 4 if alpha else 3)
+        except ImageError as error:
+            raise click.BadParameter(str(error).split(";")[0], param_hint="'--ext'") from None
+    table_format = "csv"
+    if table_path is None:
+        table_path = str(outdir / "gsrwt.csv")
+    elif table_path != "-":
+        table_format = format_from_extension(table_path) or ""
+        if table_format not in ("csv", "tsv", "json", "jsonl"):
+            raise click.BadParameter(
+                "the table's name must end in .csv, .tsv, .json or .jsonl (or be -)",
+                param_hint="'--table'",
+            )
+
+    loaded = None
+    if sidecar is not None:
+        try:
+            loaded = load_sidecar(sidecar)
+        except SidecarError as error:
+            raise InputError(str(error)) from None
+    sources = collect_sources(inputs, recursive)
+    if not sources:
+        raise InputError(f"no images found in {' '.join(inputs)}")
+    job_list = plan_jobs(sources, outdir, loaded, view_defaults(view_kwargs), extension)
+    refuse_unsafe_outputs(
+        inputs, sources, [job.output for job in job_list], outdir, recursive,
+        None if table_path == "-" else Path(table_path), sidecar,
+    )
+
+    settings = Settings(
+        bbox=box, scale=scale or 1.0, px_per_unit=px_per_unit, max_stretch=max_stretch,
+        max_pixels=pixel_limit, interpolation=interpolation, fill=fill, alpha=alpha,
+        quality=quality, overwrite=overwrite, dry_run=dry_run,
+    )
+    processes = jobs or os.cpu_count() or 1
+    if not dry_run:
+        outdir.mkdir(parents=True, exist_ok=True)
+    progress = tqdm(
+        total=len(job_list), unit="img", file=sys.stderr, dynamic_ncols=True,
+        disable=quiet or not sys.stderr.isatty(),
+    )
+    with open_table(table_path) as stream:
+        writer = TableWriter(stream, RECTIFY_COLUMNS, table_format)
+
+        def on_row(row: dict[str, Any]) -> None:
+            writer.write_row(row)
+            if row["status"] == "error":
+                progress.write(f"Error: {row['image']}: {row['error']}", file=sys.stderr)
+            progress.update(1)
+
+        try:
+            counts = run_batch(job_list, settings, processes, on_row)
+        finally:
+            writer.close()
+            progress.close()
+    if not quiet:
+        where = "" if table_path == "-" else f"; table: {table_path}"
+        click.echo(
+            f"gsrwt: {counts.ok} ok, {counts.skipped} skipped, {counts.failed} failed{where}",
+            err=True,
+        )
+    if counts.failed:
+        sys.exit(1)
