@@ -21,13 +21,12 @@ from .camera import View
 from .imaging import (
     IMAGE_EXTENSIONS,
     ImageError,
-    Workspace,
+    Scratch,
     check_writable,
     encode_image,
-    read_image,
     write_atomic,
 )
-from .rectify import plan_image, rectify_image
+from .rectify import plan_image
 from .report import PARAMS_COLUMNS, params_row
 from .sidecar import RecordError, Sidecar, merge_values, view_from_values
 
@@ -186,12 +185,12 @@ def plan_jobs(
 # --------------------------------------------------------------------------------------------
 
 _settings = Settings()
-_workspace = Workspace()
+_scratch = Scratch()
 
 
 def _init_worker(settings: Settings) -> None:
-    global _settings, _workspace
-    _settings, _workspace = settings, Workspace()
+    global _settings, _scratch
+    _settings, _scratch = settings, Scratch()
     if settings.threads_per_worker:
         cv2.setNumThreads(settings.threads_per_worker)
 
@@ -219,34 +218,27 @@ def process_job(job: Job, settings: Settings | None = None) -> dict[str, Any]:
             return row
         if not job.source.is_file():
             raise _JobError("no such file" if not job.source.exists() else "not a file")
-        image = read_image(job.source)
-        channels = 1 if image.ndim == 2 else image.shape[2]
+        shape, dtype = _scratch.read(job.source)
+        channels = 1 if len(shape) == 2 else shape[2]
         check_writable(
-            job.output.suffix, image.dtype, 4 if settings.alpha and channels in (1, 3) else channels
+            job.output.suffix, dtype, 4 if settings.alpha and channels in (1, 3) else channels
         )
-        kwargs = dict(
+        info = plan_image(
+            view,
+            shape[1],
+            shape[0],
             bbox=settings.bbox,
             scale=settings.scale,
             px_per_unit=settings.px_per_unit,
             max_stretch=settings.max_stretch,
             max_pixels=settings.max_pixels,
         )
-        if settings.dry_run:
-            info = plan_image(view, image.shape[1], image.shape[0], **kwargs)
-        else:
-            output, info = rectify_image(
-                image,
-                view,
-                interpolation=settings.interpolation,
-                fill=settings.fill,
-                alpha=settings.alpha,
-                workspace=_workspace,
-                **kwargs,
+        if not settings.dry_run:
+            warped = _scratch.warp(
+                info.homography, info.size, settings.interpolation, settings.fill,
+                settings.alpha,
             )
-            del image
-            data = encode_image(output, job.output.suffix, settings.quality)
-            del output
-            write_atomic(job.output, data)
+            write_atomic(job.output, encode_image(warped, job.output.suffix, settings.quality))
         row.update(params_row(info.view, str(job.source)))
         row.update(
             out_width=info.size[0],
@@ -271,6 +263,17 @@ def _one_line(error: BaseException) -> str:
     return " ".join(text.split())
 
 
+def _worker_context() -> multiprocessing.context.BaseContext:
+    """Workers fork from a fresh server that has imported this module once (fast to start),
+    never from the caller, whose OpenCV thread pool a fork could leave locked; spawn where
+    there is no forkserver."""
+    if "forkserver" in multiprocessing.get_all_start_methods():
+        context = multiprocessing.get_context("forkserver")
+        context.set_forkserver_preload([__name__])
+        return context
+    return multiprocessing.get_context("spawn")
+
+
 def run_jobs(
     jobs: list[Job], settings: Settings, processes: int
 ) -> Iterator[dict[str, Any]]:
@@ -281,7 +284,7 @@ def run_jobs(
         for job in jobs:
             yield process_job(job, settings)
         return
-    context = multiprocessing.get_context("spawn")
+    context = _worker_context()
     threads = Settings(**{**settings.__dict__, "threads_per_worker": 1})
     with context.Pool(processes, initializer=_init_worker, initargs=(threads,)) as pool:
         try:

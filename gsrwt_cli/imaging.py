@@ -4,8 +4,10 @@ from __future__ import annotations
 
 import contextlib
 import os
+import sys
 import tempfile
-from dataclasses import dataclass, field
+from collections.abc import Iterator
+from dataclasses import dataclass
 from pathlib import Path
 
 import cv2
@@ -69,55 +71,158 @@ def check_writable(extension: str, dtype: np.dtype, channels: int) -> None:
         raise ImageError(f"{ext} cannot store {what} images; use --ext png or --ext tif")
 
 
-def _check_complete(data: np.ndarray) -> None:
-    """Detect truncated JPEG and PNG files, which OpenCV would decode partially."""
-    head = bytes(data[:8])
-    tail = bytes(data[-64:]).rstrip(b"\x00")
+
+# --------------------------------------------------------------------------------------------
+# Reading
+# --------------------------------------------------------------------------------------------
+
+
+def _check_complete(path: str) -> None:
+    """Refuse empty files, and truncated JPEG and PNG files (OpenCV decodes those partially)."""
+    with open(path, "rb") as handle:
+        head = handle.read(8)
+        if not head:
+            raise ImageError("empty file")
+        handle.seek(max(0, os.fstat(handle.fileno()).st_size - 64))
+        tail = handle.read().rstrip(b"\x00")
     if head[:3] == b"\xff\xd8\xff" and not tail.endswith(b"\xff\xd9"):
         raise ImageError("truncated JPEG (no end-of-image marker)")
     if head == b"\x89PNG\r\n\x1a\n" and b"IEND" not in tail:
         raise ImageError("truncated PNG (no IEND chunk)")
 
 
-def read_image(path: str | Path) -> np.ndarray:
+@contextlib.contextmanager
+def _codec_messages() -> Iterator[list[str]]:
+    """Collect what the C codecs (libjpeg, libpng) print on stderr instead of letting it out.
+
+    libjpeg reports damaged data only there ("Corrupt JPEG data: ...", "Premature end of JPEG
+    file") and still returns an image; collected, such messages become errors.
+    """
+    messages: list[str] = []
+    sys.stderr.flush()
+    saved = os.dup(2)
+    with tempfile.TemporaryFile() as sink:
+        os.dup2(sink.fileno(), 2)
+        try:
+            yield messages
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
+            sink.seek(0)
+            text = sink.read().decode(errors="replace")
+            messages.extend(line.strip() for line in text.splitlines() if line.strip())
+
+
+def read_image(path: str | Path, into: np.ndarray | None = None) -> np.ndarray:
     """Read an image file as it is stored: 8/16-bit or float, grey, colour (BGR) or BGRA.
 
-    Raises :class:`ImageError` for a file that is empty, truncated or not decodable.
-    Reads through numpy so that non-ASCII paths work; EXIF orientation is not applied
+    ``into``: an array to decode into if the image has its shape and type (see
+    :class:`Scratch`); otherwise a new array. Raises :class:`ImageError` for a file that is
+    missing, empty, truncated, damaged or not decodable. EXIF orientation is not applied
     (pan and tilt describe the sensor, not the display).
     """
+    name = os.fspath(path)
     try:
-        data = np.fromfile(str(path), dtype=np.uint8)
+        _check_complete(name)
     except OSError as error:
         raise ImageError(f"cannot read ({error.strerror or error})") from None
-    if data.size == 0:
-        raise ImageError("empty file")
-    _check_complete(data)
-    image = cv2.imdecode(data, cv2.IMREAD_UNCHANGED)
+    image = None
+    with _codec_messages() as messages:
+        if into is not None:
+            with contextlib.suppress(cv2.error):  # another shape or type: decode afresh
+                image = cv2.imread(name, into, cv2.IMREAD_UNCHANGED)
+        if image is None:
+            try:
+                image = cv2.imread(name, cv2.IMREAD_UNCHANGED)
+            except cv2.error:
+                image = None
     if image is None or image.size == 0:
-        raise ImageError("not an image OpenCV can decode (corrupt or unsupported)")
-    if image.ndim == 3 and image.shape[2] == 2:  # grey + alpha
-        image = cv2.cvtColor(image, cv2.COLOR_GRAY2BGRA)  # pragma: no cover - OpenCV expands
+        reason = f" ({messages[0]})" if messages else ""
+        raise ImageError(f"not an image OpenCV can decode (corrupt or unsupported){reason}")
+    damage = [m for m in messages if "Corrupt JPEG" in m or "Premature end" in m]
+    if damage:
+        raise ImageError(f"corrupt JPEG ({damage[0]})")
     return image
 
 
-@dataclass
-class Workspace:
-    """Buffers reused from one image to the next (one per worker) to avoid page faults."""
-
-    buffers: dict[tuple, np.ndarray] = field(default_factory=dict)
-
-    def get(self, name: str, shape: tuple[int, ...], dtype: np.dtype) -> np.ndarray:
-        key = (name, shape, np.dtype(dtype).str)
-        buffer = self.buffers.get(key)
-        if buffer is None:
-            self.buffers = {k: v for k, v in self.buffers.items() if k[0] != name}
-            buffer = self.buffers[key] = np.empty(shape, dtype)
-        return buffer
+# --------------------------------------------------------------------------------------------
+# Warping
+# --------------------------------------------------------------------------------------------
 
 
 def _full_value(dtype: np.dtype) -> float:
     return float(np.iinfo(dtype).max) if np.issubdtype(dtype, np.integer) else 1.0
+
+
+@dataclass(frozen=True)
+class Working:
+    """Pixels in the layout the warp works in.
+
+    Colour images are warped as BGRA, which OpenCV does about twice as fast as BGR;
+    ``padded`` says the fourth channel is such padding rather than the image's alpha.
+    """
+
+    pixels: np.ndarray
+    padded: bool = False
+
+
+def to_working(image: np.ndarray, alpha: bool = False, out: np.ndarray | None = None) -> Working:
+    """The layout to warp ``image`` in.
+
+    An opaque alpha channel is added when ``alpha`` asks for one, colour images get BGRA
+    padding (into ``out`` if given), anything else is warped as it is.
+    """
+    channels = 1 if image.ndim == 2 else image.shape[2]
+    if alpha and channels in (1, 3):
+        code = cv2.COLOR_GRAY2BGRA if channels == 1 else cv2.COLOR_BGR2BGRA
+        return Working(cv2.cvtColor(image, code, dst=out))
+    if channels == 3:
+        return Working(cv2.cvtColor(image, cv2.COLOR_BGR2BGRA, dst=out), padded=True)
+    return Working(image)
+
+
+def warp_working(
+    source: Working,
+    output_from_input: Matrix,
+    size: tuple[int, int],
+    interpolation: str = "linear",
+    fill: float = 0.0,
+    alpha: bool = False,
+    out: np.ndarray | None = None,
+) -> Working:
+    """Backward-map the pixels through a homography in one OpenCV pass (thesis Sec. 5.1).
+
+    ``size`` is the output's ``(width, height)``. Output pixels with no source get ``fill``
+    (in the image's own units), opaque, or transparent with ``alpha``. Output pixels that
+    map to the far side of the vanishing line (``w <= 0``: what the camera saw beyond the
+    wall's horizon) get the same: ``output_from_input`` must be scaled so that ``w > 0``
+    where the wall is visible, as the framing module's homographies are. ``out``: an array
+    of the output's shape and type to write into (see :class:`Scratch`).
+    """
+    width, height = size
+    pixels = source.pixels
+    channels = 1 if pixels.ndim == 2 else pixels.shape[2]
+    border = [fill] * min(channels, 3)
+    if channels == 4:
+        border.append(0.0 if alpha else _full_value(pixels.dtype))
+    warped = cv2.warpPerspective(
+        pixels,
+        np.asarray(output_from_input, dtype=np.float64),
+        (width, height),
+        dst=out,
+        flags=INTERPOLATIONS[interpolation],
+        borderMode=cv2.BORDER_CONSTANT,
+        borderValue=tuple(border + [0.0] * (4 - len(border))),
+    )
+    _fill_beyond_horizon(warped, output_from_input, border)
+    return Working(warped, source.padded)
+
+
+def from_working(warped: Working) -> np.ndarray:
+    """The image in its own layout again (BGRA padding dropped)."""
+    if warped.padded:
+        return cv2.cvtColor(warped.pixels, cv2.COLOR_BGRA2BGR)
+    return warped.pixels
 
 
 def warp_image(
@@ -127,54 +232,84 @@ def warp_image(
     interpolation: str = "linear",
     fill: float = 0.0,
     alpha: bool = False,
-    workspace: Workspace | None = None,
 ) -> np.ndarray:
-    """Backward-map ``image`` through a homography in one OpenCV pass (thesis Sec. 5.1).
+    """Warp ``image`` (any depth; grey, BGR or BGRA) into a new array: see :func:`warp_working`.
 
-    ``size`` is ``(width, height)`` of the output. Output pixels with no source get ``fill``
-    (in the image's own units); with ``alpha`` they become transparent instead, and an
-    alpha channel is added if the image had none. Output pixels that map to the far side of
-    the vanishing line (``w <= 0``, what the camera saw beyond the wall's horizon) get the
-    fill as well: ``output_from_input`` must be scaled so that ``w > 0`` where the wall is
-    visible, as the framing module's homographies are. Colour images are warped as four
-    channels, which OpenCV does about twice as fast as three.
+    With ``alpha`` the result has an alpha channel (added if the image had none).
     """
-    width, height = size
-    flags = INTERPOLATIONS[interpolation]
-    dtype = image.dtype
-    opaque = _full_value(dtype)
-    channels = 1 if image.ndim == 2 else image.shape[2]
-    if alpha and channels in (1, 3):
-        source = cv2.cvtColor(image, cv2.COLOR_GRAY2BGRA if channels == 1 else cv2.COLOR_BGR2BGRA)
-    elif channels == 3:
-        source = _buffer(workspace, "source", (*image.shape[:2], 4), dtype)
-        cv2.cvtColor(image, cv2.COLOR_BGR2BGRA, dst=source)
-    else:
-        source = image
-    work_channels = 1 if source.ndim == 2 else source.shape[2]
-    # No source: the fill colour, opaque unless --alpha asks for transparency.
-    border = [fill] * min(work_channels, 3) + [0.0 if alpha else opaque] * (work_channels == 4)
-    warped = _buffer(workspace, "warped", (height, width, work_channels)[: source.ndim], dtype)
-    cv2.warpPerspective(
-        source,
-        np.asarray(output_from_input, dtype=np.float64),
-        (width, height),
-        dst=warped,
-        flags=flags,
-        borderMode=cv2.BORDER_CONSTANT,
-        borderValue=tuple(border + [0.0] * (4 - len(border))),
+    source = to_working(image, alpha)
+    return from_working(
+        warp_working(source, output_from_input, size, interpolation, fill, alpha)
     )
-    _fill_beyond_horizon(warped, output_from_input, border)
-    if image.ndim == 3 and image.shape[2] == 3 and not alpha:
-        result = np.empty((height, width, 3), dtype)
-        return cv2.cvtColor(warped, cv2.COLOR_BGRA2BGR, dst=result)
-    return warped.copy() if workspace is not None else warped
 
 
-def _buffer(workspace: Workspace | None, name: str, shape: tuple[int, ...], dtype) -> np.ndarray:
-    if workspace is None:
-        return np.empty(shape, dtype)
-    return workspace.get(name, shape, dtype)
+class Scratch:
+    """One worker's memory for decoding and warping, reused from image to image.
+
+    Fresh memory costs page faults (the warp writes about 40% slower into it), and OpenCV
+    decodes straight into an array of the right shape, where otherwise it briefly holds the
+    image twice. Two regions trade places: a colour image is decoded into region 0, padded
+    to BGRA in region 1 and warped back into region 0, whose decoded pixels are dead by then.
+    A worker so holds about two images' worth of memory. Use :meth:`read`, then :meth:`warp`.
+    """
+
+    def __init__(self) -> None:
+        self._regions: list[np.ndarray] = [np.empty(0, np.uint8), np.empty(0, np.uint8)]
+        self._decoded: np.ndarray | None = None
+        self._shape: tuple[tuple[int, ...], np.dtype] | None = None
+
+    def array(self, region: int, shape: tuple[int, ...], dtype: np.dtype) -> np.ndarray:
+        """An uninitialized array of ``shape`` and ``dtype`` in ``region`` (0 or 1)."""
+        dtype = np.dtype(dtype)
+        nbytes = int(np.prod(shape)) * dtype.itemsize
+        if self._regions[region].nbytes < nbytes:
+            self._regions[region] = np.empty(0, np.uint8)  # free before allocating
+            self._regions[region] = np.empty(nbytes, np.uint8)
+        return self._regions[region][:nbytes].view(dtype).reshape(shape)
+
+    def read(self, path: str | Path) -> tuple[tuple[int, ...], np.dtype]:
+        """Decode an image into region 0 (:func:`read_image`); its shape and sample type.
+
+        The previous image's shape is the guess; an image of another shape is decoded
+        afresh and its memory becomes region 0.
+        """
+        self._decoded = None
+        into = self.array(0, *self._shape) if self._shape is not None else None
+        image = read_image(path, into)
+        if not np.shares_memory(image, self._regions[0]):
+            self._regions[0] = image.reshape(-1).view(np.uint8)
+        self._decoded, self._shape = image, (image.shape, image.dtype)
+        return image.shape, image.dtype
+
+    @property
+    def decoded(self) -> np.ndarray | None:
+        """The image :meth:`read` decoded, until :meth:`warp` takes it."""
+        return self._decoded
+
+    def warp(
+        self,
+        output_from_input: Matrix,
+        size: tuple[int, int],
+        interpolation: str = "linear",
+        fill: float = 0.0,
+        alpha: bool = False,
+    ) -> Working:
+        """Warp the image :meth:`read` decoded (see :func:`warp_working`)."""
+        image, self._decoded = self._decoded, None
+        if image is None:
+            raise RuntimeError("Scratch.warp needs an image from Scratch.read first")
+        width, height = size
+        channels = 1 if image.ndim == 2 else image.shape[2]
+        converts = channels == 3 or (alpha and channels == 1)
+        if converts:
+            padded = self.array(1, (*image.shape[:2], 4), image.dtype)
+            source = to_working(image, alpha, padded)
+            del image  # region 0 is free for the output
+        else:
+            source = to_working(image, alpha)
+        out_shape = (height, width, *source.pixels.shape[2:])
+        out = self.array(0 if converts else 1, out_shape, source.pixels.dtype)
+        return warp_working(source, output_from_input, size, interpolation, fill, alpha, out)
 
 
 def _fill_beyond_horizon(warped: np.ndarray, output_from_input: Matrix, value: list) -> None:
@@ -217,10 +352,22 @@ def _clip_to_half_plane(polygon: list[tuple[float, float]], line: np.ndarray):
     return clipped
 
 
-def encode_image(image: np.ndarray, extension: str, quality: int = 95) -> bytes:
-    """Encode pixels as a file of type ``extension``; JPEG and WebP at ``quality`` (1-100)."""
+# --------------------------------------------------------------------------------------------
+# Writing
+# --------------------------------------------------------------------------------------------
+
+
+def encode_image(image: np.ndarray | Working, extension: str, quality: int = 95) -> bytes:
+    """Encode pixels as a file of type ``extension``; JPEG and WebP at ``quality`` (1-100).
+
+    A padded :class:`Working` image goes to JPEG as it is (the encoder drops the fourth
+    channel itself, at no cost); other formats get it without the padding.
+    """
     ext = canonical_extension(extension)
-    channels = 1 if image.ndim == 2 else image.shape[2]
+    padded_jpeg = isinstance(image, Working) and image.padded and ext == ".jpg"
+    if isinstance(image, Working):
+        image = image.pixels if padded_jpeg else from_working(image)
+    channels = 3 if padded_jpeg else 1 if image.ndim == 2 else image.shape[2]
     check_writable(ext, image.dtype, channels)
     params: list[int] = []
     if ext == ".jpg":

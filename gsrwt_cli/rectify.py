@@ -12,7 +12,7 @@ import numpy as np
 from .camera import View
 from .framing import Frame, plan_output
 from .geometry import Matrix
-from .imaging import Workspace, warp_image
+from .imaging import warp_image
 
 
 @dataclass(frozen=True)
@@ -85,7 +85,6 @@ def rectify_image(
     interpolation: str = "linear",
     fill: float = 0.0,
     alpha: bool = False,
-    workspace: Workspace | None = None,
 ) -> tuple[np.ndarray, RectifyInfo]:
     """The canonical frontal view of the wall in ``image`` (thesis Ch. 5.1).
 
@@ -100,7 +99,5 @@ def rectify_image(
         view, width, height, bbox=bbox, scale=scale, px_per_unit=px_per_unit,
         max_stretch=max_stretch, max_pixels=max_pixels,
     )
-    output = warp_image(
-        image, info.homography, info.size, interpolation, fill, alpha, workspace
-    )
+    output = warp_image(image, info.homography, info.size, interpolation, fill, alpha)
     return output, info

@@ -1,0 +1,201 @@
+"""Throughput of ``gsrwt rectify`` on 12-megapixel JPEGs, as ratios measured in one run.
+
+Three pipelines over the same directory of JPEGs, each as its own process tree with the same
+number of worker processes, timed wall-clock from start to finish:
+
+- ``gsrwt``: the real command, ``gsrwt rectify DIR --sidecar ... -o OUT --jobs P``;
+- ``floor``: the same decodes, encodes and atomic writes (gsrwt's own functions: OpenCV,
+  JPEG quality 95, decode buffer reused) with no warp;
+- ``skimage``: the same, with ``skimage.transform.warp`` (bilinear) of the same homography.
+
+It prints images per second, the ratios gsrwt/floor (goal: at most 1.5) and skimage/gsrwt
+(goal: at least 5), and the peak memory of a gsrwt worker (its loop run over every image in
+a fresh process) above the same process idle, in units of one decoded image (goal: under 4).
+
+    python benchmarks/bench_rectify.py [--images 64] [--jobs N] [--keep DIR]
+"""
+
+from __future__ import annotations
+
+import argparse
+import multiprocessing
+import os
+import platform
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+WIDTH, HEIGHT, FOCAL = 4000, 3000, 3200.0
+POSES = [(15, 30), (-20, 10), (30, -15), (-10, -25), (25, 20), (5, 35), (-30, 5), (0, 20)]
+
+
+def make_images(folder: Path, count: int) -> None:
+    """Textured 12-megapixel JPEGs (quality 95) and their sidecar."""
+    rng = np.random.default_rng(0)
+    coarse = rng.uniform(0, 255, (HEIGHT // 8, WIDTH // 8, 3)).astype(np.uint8)
+    base = cv2.resize(coarse, (WIDTH, HEIGHT), interpolation=cv2.INTER_CUBIC)
+    lines = ["image,pan,tilt,focal"]
+    for index in range(count):
+        image = np.roll(base, 37 * index, axis=1)
+        name = f"img{index:03d}.jpg"
+        cv2.imwrite(str(folder / name), image, [cv2.IMWRITE_JPEG_QUALITY, 95])
+        pan, tilt = POSES[index % len(POSES)]
+        lines.append(f"{name},{pan},{tilt},{FOCAL}")
+    (folder / "views.csv").write_text("\n".join(lines) + "\n")
+
+
+def _views(folder: Path) -> list[tuple[Path, float, float]]:
+    rows = (folder / "views.csv").read_text().splitlines()[1:]
+    cells = [row.split(",") for row in rows]
+    return [(folder / c[0], float(c[1]), float(c[2])) for c in cells]
+
+
+_scratch = None
+
+
+def _read(source: str) -> np.ndarray:
+    """gsrwt's own decode: into a buffer reused from image to image."""
+    global _scratch
+    from gsrwt_cli.imaging import Scratch
+
+    _scratch = _scratch or Scratch()
+    _scratch.read(source)
+    return _scratch.decoded
+
+
+def _write(target: str, image: np.ndarray) -> None:
+    """gsrwt's own encode (JPEG quality 95) and atomic write."""
+    from gsrwt_cli.imaging import encode_image, write_atomic
+
+    write_atomic(target, encode_image(image, ".jpg", 95))
+
+
+def _floor_one(task: tuple[str, str]) -> None:
+    source, target = task
+    _write(target, _read(source))
+
+
+def _skimage_one(task: tuple[str, str, float, float]) -> None:
+    from skimage.transform import ProjectiveTransform, warp
+
+    from gsrwt_cli import View
+    from gsrwt_cli.framing import output_from_input
+
+    source, target, pan, tilt = task
+    image = _read(source)
+    height, width = image.shape[:2]
+    homography = output_from_input(View(pan, tilt, FOCAL, width=width, height=height))
+    # skimage's inverse_map takes output (col, row) to input (col, row), like OpenCV's.
+    inverse = ProjectiveTransform(matrix=np.linalg.inv(homography))
+    warped = warp(image, inverse, output_shape=image.shape, order=1, preserve_range=True)
+    _write(target, warped.astype(np.uint8))
+
+
+def _init(threads: int) -> None:
+    cv2.setNumThreads(threads)
+
+
+def run_pool(stage: str, folder: Path, out: Path, jobs: int) -> None:
+    """Entry point of the floor and skimage pipelines (run in their own process)."""
+    out.mkdir(parents=True, exist_ok=True)
+    views = _views(folder)
+    if stage == "floor":
+        tasks, work = [(str(p), str(out / p.name)) for p, _, _ in views], _floor_one
+    else:
+        tasks = [(str(p), str(out / p.name), pan, tilt) for p, pan, tilt in views]
+        work = _skimage_one
+    context = multiprocessing.get_context("spawn")
+    with context.Pool(jobs, initializer=_init, initargs=(1 if jobs > 1 else 0,)) as pool:
+        list(pool.imap(work, tasks, chunksize=1))
+
+
+def timed(command: list[str]) -> float:
+    """Wall-clock seconds of a command."""
+    start = time.perf_counter()
+    subprocess.run(command, check=True)
+    return time.perf_counter() - start
+
+
+def high_water_kib() -> int:
+    """This process's peak resident memory (VmHWM, reset at exec unlike ru_maxrss)."""
+    for line in Path("/proc/self/status").read_text().splitlines():
+        if line.startswith("VmHWM:"):
+            return int(line.split()[1])
+    raise RuntimeError("no VmHWM in /proc/self/status")
+
+
+def worker_memory(folder: Path, out: Path) -> None:
+    """Run one gsrwt worker's loop over all images; print idle and peak memory (KiB)."""
+    from gsrwt_cli.batch import Job, Settings, _init_worker, process_job
+
+    settings = Settings(overwrite=True, threads_per_worker=1)
+    _init_worker(settings)
+    idle = high_water_kib()
+    for path, pan, tilt in _views(folder):
+        job = Job(path, out / path.name, {"pan": pan, "tilt": tilt, "focal": FOCAL}, "bench")
+        assert process_job(job, settings)["status"] == "ok"
+    print(idle, high_water_kib())
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--images", type=int, default=64)
+    parser.add_argument("--jobs", type=int, default=os.cpu_count() or 1)
+    parser.add_argument("--keep", type=Path, help="Use (and keep) this directory for the data.")
+    parser.add_argument("--stage", choices=["floor", "skimage", "memory"], help=argparse.SUPPRESS)
+    parser.add_argument("--folder", type=Path, help=argparse.SUPPRESS)
+    parser.add_argument("--out", type=Path, help=argparse.SUPPRESS)
+    args = parser.parse_args()
+    if args.stage == "memory":
+        worker_memory(args.folder, args.out)
+        return
+    if args.stage:
+        run_pool(args.stage, args.folder, args.out, args.jobs)
+        return
+
+    root = args.keep or Path(tempfile.mkdtemp(prefix="gsrwt-bench-"))
+    folder = root / "in"
+    if not (folder / "views.csv").exists() or len(_views(folder)) != args.images:
+        folder.mkdir(parents=True, exist_ok=True)
+        make_images(folder, args.images)
+    gsrwt = shutil.which("gsrwt") or str(Path(sys.executable).with_name("gsrwt"))
+    me = [sys.executable, __file__, "--folder", str(folder), "--jobs", str(args.jobs)]
+    # The inputs were just written (or read by an earlier run): all three read them from the
+    # page cache.
+    results = {}
+    for name, command in [
+        ("gsrwt", [gsrwt, "rectify", str(folder), "--sidecar", str(folder / "views.csv"),
+                   "-o", str(root / "gsrwt"), "--jobs", str(args.jobs), "--quiet",
+                   "--overwrite"]),
+        ("floor", [*me, "--stage", "floor", "--out", str(root / "floor")]),
+        ("skimage", [*me, "--stage", "skimage", "--out", str(root / "skimage")]),
+    ]:
+        results[name] = timed(command)
+    decoded_kib = WIDTH * HEIGHT * 3 / 1024
+    memory = subprocess.run([*me, "--stage", "memory", "--out", str(root / "memory")],
+                            capture_output=True, text=True, check=True).stdout.split()
+    idle, peak = (int(v) for v in memory)
+    rate = {name: args.images / seconds for name, seconds in results.items()}
+    print(f"machine: {platform.machine()}, {os.cpu_count()} cores, {platform.python_version()}, "
+          f"OpenCV {cv2.__version__}; {args.images} JPEGs of {WIDTH}x{HEIGHT}, {args.jobs} "
+          "processes")
+    for name in ("floor", "gsrwt", "skimage"):
+        print(f"  {name:8s} {results[name]:6.2f} s  {rate[name]:6.2f} images/s")
+    print(f"gsrwt time / I/O floor time:   {results['gsrwt'] / results['floor']:.2f}"
+          "  (goal <= 1.5)")
+    print(f"skimage time / gsrwt time:     {results['skimage'] / results['gsrwt']:.2f}"
+          "  (goal >= 5)")
+    print(f"gsrwt worker peak memory:      {(peak - idle) / 1024:.0f} MiB above its idle "
+          f"{idle / 1024:.0f} MiB = {(peak - idle) / decoded_kib:.2f} decoded images  (goal < 4)")
+    if not args.keep:
+        shutil.rmtree(root)
+
+
+if __name__ == "__main__":
+    main()
