@@ -28,7 +28,15 @@ from .imaging import (
 )
 from .rectify import plan_image
 from .report import PARAMS_COLUMNS, params_row
-from .sidecar import RecordError, Sidecar, merge_values, view_from_values
+from .sidecar import (
+    NUMERIC_FIELDS,
+    RecordError,
+    Sidecar,
+    SidecarError,
+    load_sidecar,
+    merge_values,
+    view_from_values,
+)
 
 RECTIFY_COLUMNS = (
     *PARAMS_COLUMNS,
@@ -146,7 +154,15 @@ def parameters_for(
         if not isinstance(data, dict):
             return None, str(beside), f"{beside}: expected a mapping of field to value"
         values = {str(k).strip().lower(): v for k, v in data.items() if v is not None}
-        return merge_values(values, fallback), str(beside), None
+        if set(values) & set(NUMERIC_FIELDS):  # one record: this image's parameters
+            return merge_values(values, fallback), str(beside), None
+        try:  # a sidecar mapping (as gsrwt render writes): look the image up in it
+            record = load_sidecar(beside).find(source.path.name)
+        except SidecarError as error:
+            return None, str(beside), str(error)
+        if record is None:
+            return None, str(beside), f"{beside}: no record for {source.path.name}"
+        return record.merged(fallback), record.where, None
     if {"pan", "tilt", "focal"} <= set(fallback):
         return dict(fallback), "options", None
     places = []

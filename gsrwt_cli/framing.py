@@ -195,3 +195,24 @@ def plan_output(
             "smaller --scale, a lower --max-stretch or a higher --max-pixels"
         )
     return Plan(frame, frame.output_from_default() @ output_from_input(view))
+
+
+def texture_from_camera(view: View, texture_size: tuple[int, int]) -> Matrix:
+    """Camera pixel to texture pixel for a frontal texture covering the wall (``gsrwt render``).
+
+    The texture's centre sits at the foot of the perpendicular from the camera to the wall
+    and one texture pixel is ``Zc / f`` wall units, so that rectifying the camera's view
+    (:func:`output_from_input`) gives the texture back, shifted. The matrix is the GS-RWT
+    pixel homography plus that shift, normalized like it (``w > 0`` where the wall is seen).
+    """
+    width, height = texture_size
+    alpha, beta = np.radians(view.pan), np.radians(view.tilt)
+    # Where the optical axis meets the wall, in frontal pixels from the foot (x up, y right).
+    axis_x = view.focal * np.tan(beta) / np.cos(alpha)
+    axis_y = -view.focal * np.tan(alpha)
+    shift = np.array(
+        [[1.0, 0.0, (width - 1) / 2 - view.cx + axis_y],
+         [0.0, 1.0, (height - 1) / 2 - view.cy - axis_x],
+         [0.0, 0.0, 1.0]]
+    )
+    return shift @ output_from_input(view)

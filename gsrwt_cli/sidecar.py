@@ -273,3 +273,38 @@ def _yaml_mapping(path: Path, where: str, item: Any) -> dict[str, Any]:
     if not isinstance(item, dict):
         raise SidecarError(f"{where}: expected a mapping of field to value, got {item!r}")
     return {str(k).strip().lower(): v for k, v in item.items()}
+
+
+def format_sidecar(path: str | Path, rows: list[Mapping[str, Any]]) -> str:
+    """Sidecar text for ``rows`` (dicts with ``image`` and view fields), CSV or YAML by extension.
+
+    Only the columns some row has are written, in the order of :data:`VIEW_FIELDS`; what
+    :func:`load_sidecar` reads back gives the same views.
+    """
+    columns = [name for name in VIEW_FIELDS if any(row.get(name) is not None for row in rows)]
+    suffix = Path(path).suffix.lower()
+    if suffix in (".yaml", ".yml"):
+        mapping = {
+            str(row["image"]): {c: row[c] for c in columns if row.get(c) is not None}
+            for row in rows
+        }
+        return yaml.safe_dump(mapping, sort_keys=False, allow_unicode=True)
+    if suffix not in (".csv", ".tsv"):
+        raise SidecarError(f"{path}: a sidecar must end in .csv, .tsv or .yaml")
+    lines = []
+    writer = csv.writer(_LineSink(lines), delimiter="\t" if suffix == ".tsv" else ",",
+                        lineterminator="\n")
+    writer.writerow(["image", *columns])
+    for row in rows:
+        writer.writerow([row["image"], *("" if row.get(c) is None else row[c] for c in columns)])
+    return "".join(lines)
+
+
+class _LineSink:
+    """A write() target collecting text for csv.writer."""
+
+    def __init__(self, lines: list[str]) -> None:
+        self.lines = lines
+
+    def write(self, text: str) -> None:
+        self.lines.append(text)

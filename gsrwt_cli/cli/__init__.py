@@ -7,6 +7,7 @@ import click
 from .. import __version__
 from .params import params
 from .rectify import rectify
+from .render import render
 
 
 class GsrwtGroup(click.Group):
@@ -45,3 +46,4 @@ def main(ctx: click.Context, debug: bool) -> None:
 
 main.add_command(params)
 main.add_command(rectify)
+main.add_command(render)

@@ -1,0 +1,94 @@
+"""The image layer: decoding into reused memory, warping layouts, encoding, atomic writes."""
+
+from __future__ import annotations
+
+import os
+
+import cv2
+import numpy as np
+import pytest
+from conftest import smooth_texture
+
+from gsrwt_cli import View
+from gsrwt_cli.framing import output_from_input
+from gsrwt_cli.imaging import (
+    ImageError,
+    Scratch,
+    Working,
+    encode_image,
+    read_image,
+    warp_image,
+    write_atomic,
+)
+
+
+def test_scratch_gives_the_same_pixels_as_fresh_arrays_across_shapes_and_types(tmp_path):
+    images = [
+        smooth_texture(120, 160, 1),
+        smooth_texture(120, 160, 2),  # same shape: decoded into the reused region
+        smooth_texture(90, 200, 3, channels=1),  # grey, another shape
+        smooth_texture(150, 100, 4).astype(np.uint16) * 257,  # 16-bit
+        np.dstack([smooth_texture(120, 160, 5), smooth_texture(120, 160, 6, channels=1)]),
+        smooth_texture(120, 160, 7),
+    ]
+    scratch = Scratch()
+    for index, image in enumerate(images):
+        path = tmp_path / f"{index}.png"
+        cv2.imwrite(str(path), image)
+        shape, dtype = scratch.read(path)
+        assert shape == image.shape and dtype == image.dtype
+        np.testing.assert_array_equal(scratch.decoded, image)
+        height, width = image.shape[:2]
+        homography = output_from_input(View(20, -10, 150, width=width, height=height))
+        size = (width + 30, height - 10)
+        for alpha in (False, True):
+            expected = warp_image(image, homography, size, "linear", 9, alpha)
+            scratch.read(path)
+            warped = scratch.warp(homography, size, "linear", 9, alpha)
+            got = cv2.cvtColor(warped.pixels, cv2.COLOR_BGRA2BGR) if warped.padded else (
+                warped.pixels)
+            np.testing.assert_array_equal(got, expected)
+
+
+def test_padded_jpeg_encodes_exactly_like_the_colour_image():
+    image = smooth_texture(100, 120, 8)
+    padded = Working(cv2.cvtColor(image, cv2.COLOR_BGR2BGRA), padded=True)
+    assert encode_image(padded, ".jpg") == encode_image(image, ".jpg")
+    assert encode_image(padded, ".png") == encode_image(image, ".png")
+
+
+@pytest.mark.parametrize(
+    ("extension", "image", "message"),
+    [
+        (".jpg", np.zeros((4, 4), np.uint16), ".jpg cannot store 16-bit images"),
+        (".jpg", np.zeros((4, 4, 4), np.uint8), ".jpg cannot store alpha (RGBA) images"),
+        (".gif", np.zeros((4, 4), np.uint8), "cannot write '.gif' files"),
+    ],
+)
+def test_formats_that_cannot_hold_the_pixels_are_refused(extension, image, message):
+    with pytest.raises(ImageError, match=message.replace("(", r"\(").replace(")", r"\)")):
+        encode_image(image, extension)
+
+
+def test_write_atomic_replaces_whole_files_and_leaves_nothing_on_failure(tmp_path):
+    target = tmp_path / "out.bin"
+    write_atomic(target, b"first")
+    write_atomic(target, b"second")
+    assert target.read_bytes() == b"second"
+    assert oct(os.stat(target).st_mode & 0o777) != oct(0o600)  # not mkstemp's private mode
+    with pytest.raises(TypeError):
+        write_atomic(target, "not bytes")  # fails while writing the temporary file
+    assert target.read_bytes() == b"second"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out.bin"]
+
+
+def test_damaged_jpeg_is_an_error_not_a_grey_picture(tmp_path):
+    ok, data = cv2.imencode(".jpg", smooth_texture(200, 200, 9))
+    data = data.tobytes()
+    damaged = data[: len(data) // 2] + bytes(200) + data[-2:]  # hole, but an end marker
+    (tmp_path / "d.jpg").write_bytes(damaged)
+    with pytest.raises(ImageError, match="corrupt JPEG"):
+        read_image(tmp_path / "d.jpg")
+    (tmp_path / "t.jpg").write_bytes(data[: len(data) // 2])
+    with pytest.raises(ImageError, match="truncated JPEG"):
+        read_image(tmp_path / "t.jpg")
