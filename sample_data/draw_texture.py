@@ -8,8 +8,8 @@ room sign ("ROOM 2.14"). Everything is drawn with numpy and cv2 drawing primitiv
 floor carry a faint, smooth, low-contrast noise texture drawn from a fixed seed, so
 the output is identical on every run.
 
-Scale: 1 px is about 3.6 mm, so the 2000 x 1500 px texture covers about 7.2 m x 5.4 m
-of wall. The centre pixel (999.5, 749.5) is where the camera looks at pan = tilt = 0.
+Scale: 1 px is about 3.6 mm, so the 3000 x 2000 px texture covers about 10.8 m x 7.2 m
+of wall. The centre pixel (1499.5, 999.5) is where the camera looks at pan = tilt = 0.
 
 Two files are written next to this script:
 
@@ -29,8 +29,8 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-WIDTH = 2000
-HEIGHT = 1500
+WIDTH = 3000
+HEIGHT = 2000
 SEED = 20240214
 MM_PER_PX = 3.6
 
@@ -42,40 +42,41 @@ JSON_PATH = OUT_DIR / "corridor_wall.json"
 # Boxes are (x0, y0, x1, y1) with x1 / y1 exclusive, i.e. a box covers the pixel
 # columns x0 .. x1 - 1 and the pixel rows y0 .. y1 - 1.
 
-BASEBOARD_TOP = 1230
+# The camera (the texture's centre, row 999.5) is at knob height, about 1 m above the floor.
+BASEBOARD_TOP = HEIGHT // 2 + 280
 BASEBOARD_HEIGHT = 30
 
 LEAF_W, LEAF_H = 250, 580
-LEAF_X0 = 560
+LEAF_X0 = WIDTH // 2 - 400  # so that every thesis view (320x240, f = 280) sees the door
 LEAF = (LEAF_X0, BASEBOARD_TOP - LEAF_H, LEAF_X0 + LEAF_W, BASEBOARD_TOP)
 CASING = 18
 FRAME_OUTER = (LEAF[0] - CASING, LEAF[1] - CASING, LEAF[2] + CASING, BASEBOARD_TOP)
 
-# Escutcheon plate (26 x 80) centred 35 px left of the leaf's right edge, at row 900.
+# Escutcheon plate (26 x 80) centred 35 px left of the leaf's right edge, 270 px above the floor.
 PLATE_W, PLATE_H = 26, 80
-PLATE_CX, PLATE_CY = LEAF[2] - 35, 900
+PLATE_CX, PLATE_CY = LEAF[2] - 35, BASEBOARD_TOP - 270
 PLATE = (PLATE_CX - PLATE_W // 2, PLATE_CY - PLATE_H // 2,
          PLATE_CX + PLATE_W // 2, PLATE_CY + PLATE_H // 2)
 KNOB_RADIUS = 11
 KNOB_BOX = (40, 100)
 
-# Peek window: 110 x 80 overall (frame included), centred on the leaf at row 780.
+# Peek window: 110 x 80 overall (frame included), centred on the leaf, 450 px above the floor.
 WINDOW_W, WINDOW_H = 110, 80
 WINDOW_FRAME = 8
-WINDOW_CX, WINDOW_CY = (LEAF[0] + LEAF[2]) // 2, 780
+WINDOW_CX, WINDOW_CY = (LEAF[0] + LEAF[2]) // 2, BASEBOARD_TOP - 450
 WINDOW = (WINDOW_CX - WINDOW_W // 2, WINDOW_CY - WINDOW_H // 2,
           WINDOW_CX + WINDOW_W // 2, WINDOW_CY + WINDOW_H // 2)
 WINDOW_BOX = (120, 90)
 
 # Light switch plate: 46 x 76, centred 150 px right of the frame's outer right edge.
 SWITCH_W, SWITCH_H = 46, 76
-SWITCH_CX, SWITCH_CY = FRAME_OUTER[2] + 150, 880
+SWITCH_CX, SWITCH_CY = FRAME_OUTER[2] + 150, BASEBOARD_TOP - 350
 SWITCH = (SWITCH_CX - SWITCH_W // 2, SWITCH_CY - SWITCH_H // 2,
           SWITCH_CX + SWITCH_W // 2, SWITCH_CY + SWITCH_H // 2)
 
 # Room sign: 200 x 70, above the switch, centred on the same column.
 SIGN_W, SIGN_H = 200, 70
-SIGN_CX, SIGN_CY = SWITCH_CX, 740
+SIGN_CX, SIGN_CY = SWITCH_CX, BASEBOARD_TOP - 490
 SIGN = (SIGN_CX - SIGN_W // 2, SIGN_CY - SIGN_H // 2,
         SIGN_CX + SIGN_W // 2, SIGN_CY + SIGN_H // 2)
 SIGN_TEXT = "ROOM 2.14"
@@ -292,8 +293,8 @@ def _truth() -> dict:
             "[x0, y0, x1, y1] covers columns x0..x1-1 and rows y0..y1-1 (x1, y1 exclusive) "
             "and an edge value is the boundary between two pixel columns/rows. Subtract 0.5 "
             "to get pixel-centre (array index) coordinates. Exception: 'centre' is the "
-            "texture's centre pixel in pixel-centre coordinates, ((W-1)/2, (H-1)/2) = "
-            "(999.5, 749.5), i.e. the point (1000, 750) in pixel-edge coordinates. "
+            "texture's centre pixel in pixel-centre coordinates, ((W-1)/2, (H-1)/2), "
+            "i.e. the point (W/2, H/2) in pixel-edge coordinates. "
             "'box' (knob, window) is a [w, h] box centred on 'centre' that contains the "
             "whole feature; 'size' (switch, sign) is the exact plate size [w, h]."
         ),
@@ -304,7 +305,7 @@ def draw_corridor_wall() -> tuple[np.ndarray, dict]:
     """Draw the corridor-wall texture.
 
     Returns:
-        The 1500 x 2000 8-bit BGR image and the ground-truth dict written to
+        The HEIGHT x WIDTH 8-bit BGR image and the ground-truth dict written to
         ``corridor_wall.json``.
     """
     rng = np.random.default_rng(SEED)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import click
 
 from .. import __version__
+from .gaze import gaze, track
 from .params import params
 from .rectify import rectify
 from .render import render
@@ -47,3 +48,5 @@ def main(ctx: click.Context, debug: bool) -> None:
 main.add_command(params)
 main.add_command(rectify)
 main.add_command(render)
+main.add_command(gaze)
+main.add_command(track)

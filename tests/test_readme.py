@@ -1,0 +1,95 @@
+"""The README tells the truth: every command is documented, every command it shows runs."""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+from gsrwt_cli import __version__
+from gsrwt_cli.cli import main
+
+ROOT = Path(__file__).resolve().parent.parent
+README = (ROOT / "README.md").read_text()
+
+
+def sh_blocks(text: str) -> list[list[str]]:
+    return [block.strip().splitlines() for block in re.findall(r"```sh\n(.*?)```", text, re.S)]
+
+
+def readme_commands() -> list[str]:
+    """Every gsrwt command line in the README's sh blocks (the part after `pip ... &&`)."""
+    commands = []
+    for block in sh_blocks(README):
+        for line in block:
+            command = line.split(" && ", 1)[1] if line.startswith("pip ") else line
+            if re.match(r"(gsrwt |find .*\| gsrwt )", command):
+                commands.append(command)
+    return commands
+
+
+def test_quick_start_is_one_sh_block_of_two_lines():
+    section = README.split("## Quick start", 1)[1].split("\n## ", 1)[0]
+    (block,) = sh_blocks(section)
+    assert len(block) == 2
+    assert block[0].startswith("pip install . && gsrwt rectify sample_data")
+    assert block[1] == "pip install '.[test]' && python -m pytest -q"
+    ci = (ROOT / ".ci" / "run").read_text()
+    assert "sed -n 2p" in ci  # CI runs that very line
+
+
+@pytest.mark.parametrize("name", sorted(main.commands))
+def test_every_command_and_option_is_documented(name):
+    assert f"## `gsrwt {name}`" in README or f"`gsrwt {name}`" in README
+    for parameter in main.commands[name].params:
+        for option in parameter.opts:
+            if option.startswith("--") and option != "--help":
+                assert option in README, f"gsrwt {name} {option} is not in the README"
+
+
+@pytest.mark.parametrize("name", sorted(main.commands))
+def test_every_command_has_help_with_an_example(name):
+    result = CliRunner().invoke(main, [name, "--help"])
+    assert result.exit_code == 0
+    assert "Example" in result.output and f"gsrwt {name}" in result.output
+
+
+def test_version():
+    result = CliRunner().invoke(main, ["--version"])
+    assert result.exit_code == 0 and result.output.strip() == f"gsrwt, version {__version__}"
+
+
+def test_every_readme_command_runs(tmp_path):
+    """Run them all, in order, in a copy of the sample data, as a user would from the root."""
+    shutil.copytree(ROOT / "sample_data", tmp_path / "sample_data")
+    environment = {**os.environ, "PATH": f"{Path(sys.executable).parent}{os.pathsep}"
+                   f"{os.environ.get('PATH', '')}"}
+    commands = readme_commands()
+    assert len(commands) >= 12
+    outputs: dict[str, subprocess.CompletedProcess] = {}
+    for command in commands:
+        result = subprocess.run(["bash", "-o", "pipefail", "-c", command], cwd=tmp_path,
+                                env=environment, capture_output=True, text=True, timeout=300)
+        assert result.returncode == 0, f"{command}\n{result.stderr}"
+        assert "Error" not in result.stderr and "Traceback" not in result.stderr, command
+        outputs.setdefault(command, result)  # the first run of a command shown twice
+    quick = commands[0]
+    assert "9 ok, 0 skipped, 0 failed" in outputs[quick].stderr
+    assert len(list((tmp_path / "rectified").glob("*.png"))) == 5
+    json_params = next(c for c in commands if "params" in c and "json" in c)
+    (row,) = json.loads(outputs[json_params].stdout)
+    assert round(row["delta_deg"], 1) == 28.2 and round(row["a_px"], 1) == 427.5
+    track = next(c for c in commands if c.startswith("gsrwt track"))
+    pans = [round(float(line.split(",")[1]), 1)
+            for line in outputs[track].stdout.splitlines()[1:]]
+    assert pans == [52.9, 40.0, 31.0]
+    assert (tmp_path / "view.yaml").is_file()
+    assert (tmp_path / "view-rectified" / "view.png").is_file()
+    assert len(list((tmp_path / "from-stdin" / "sample_data" / "views").glob("*.png"))) == 4
