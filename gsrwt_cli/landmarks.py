@@ -42,6 +42,11 @@ DEFAULT_EDGE_THRESHOLD = 80.0
 DEFAULT_THETA_STEP_DEG = 2.0
 DEFAULT_MIN_VOTES = 50
 
+#: Each edge pixel votes in the orientation bins within this many of its own (+-4 degrees with
+#: 2-degree bins): on a straight edge that a warp has resampled, the Sobel orientation of
+#: single pixels wanders by a few degrees, and one-bin votes would split a line's support.
+DEFAULT_ORIENTATION_SPREAD_BINS = 2
+
 #: Hough non-maximum suppression half-widths: +-2 orientation bins (wrapping), +-3 rho bins.
 HOUGH_SUPPRESSION_THETA_BINS = 2
 HOUGH_SUPPRESSION_RHO_BINS = 3
@@ -52,6 +57,10 @@ HOUGH_VOTER_DISTANCE = 1.5
 #: GHT R-table orientation bin width (degrees): wide enough that Sobel orientation noise on
 #: anti-aliased curves rarely moves a pixel by more than one bin.
 DEFAULT_GHT_ORIENTATION_STEP_DEG = 4.0
+
+#: A model edge pixel is found where an image edge pixel's orientation is this many GHT bins
+#: (6 degrees by default) or less away from its own.
+GHT_FOUND_ORIENTATION_BINS = 1.5
 
 #: Model bounding boxes of the thesis, read as ``(width, height)`` in pixels (Sec. 5.2.2: "40x100"
 #: for the door knob, "120x90" for the peek window).
@@ -205,15 +214,20 @@ def hough_lines(
     min_votes: int = DEFAULT_MIN_VOTES,
     rho_step: float = 1.0,
     max_lines: int | None = None,
+    orientation_spread_bins: int = DEFAULT_ORIENTATION_SPREAD_BINS,
 ) -> list[Line]:
     """Straight lines of ``image`` by the thesis's Hough transform (Sec. 5.2.2), strongest first.
 
-    Every edge pixel (:func:`edge_map` with ``edge_threshold``) votes once, in the orientation
-    bin of its own gradient direction (bins of ``theta_step_deg`` centred on multiples of it,
-    over ``[0, 360)``), for ``rho = x cos(theta) + y sin(theta)`` with ``theta`` the bin
-    centre, rounded to bins of ``rho_step``. Cells with at least ``min_votes`` votes that are
-    the maximum of their +-2 orientation bins (wrapping) x +-3 rho bins neighbourhood are
-    lines; equal counts go to the cell of lower orientation, then lower rho.
+    Every edge pixel (:func:`edge_map` with ``edge_threshold``) votes in the orientation bin
+    of its own gradient direction (bins of ``theta_step_deg`` centred on multiples of it, over
+    ``[0, 360)``) and the ``orientation_spread_bins`` bins on either side, once per bin, for
+    ``rho = x cos(theta) + y sin(theta)`` with ``theta`` the bin centre, rounded to bins of
+    ``rho_step``: a line's votes are the edge pixels on it whose orientation agrees with its
+    normal within the spread. Cells with at least ``min_votes`` votes that are
+    the maximum of their +-(2 + spread) orientation bins (wrapping) x +-3 rho bins
+    neighbourhood are lines; equal counts go to the cell of lower orientation, then lower rho.
+    Lines that refine to the same line (orientation within the spread, rho within 2 bins)
+    are reported once.
 
     Each line is refined by a total least squares fit through its voters: the edge pixels of
     its cell's and the two neighbouring orientation bins that lie within 1.5 px of the line
@@ -235,21 +249,23 @@ def hough_lines(
                                   theta_bin_count)
     bin_theta = np.radians(np.arange(theta_bin_count) * theta_step_deg)
     bin_cos, bin_sin = np.cos(bin_theta), np.sin(bin_theta)
-    rho = x * bin_cos[theta_bin] + y * bin_sin[theta_bin]
+    spread = min(max(int(orientation_spread_bins), 0), (theta_bin_count - 1) // 2)
+    vote_bin = (theta_bin[None, :] + np.arange(-spread, spread + 1)[:, None]) % theta_bin_count
+    rho = x * bin_cos[vote_bin] + y * bin_sin[vote_bin]
 
     height, width = edges.mask.shape
     rho_offset = int(math.ceil(math.hypot(width, height) / rho_step)) + 1
     rho_bin_count = 2 * rho_offset + 1
     rho_bin = np.rint(rho / rho_step).astype(np.int64) + rho_offset
-    cell = theta_bin * rho_bin_count + rho_bin
+    cell = vote_bin * rho_bin_count + rho_bin
     cell_count = theta_bin_count * rho_bin_count
-    votes = np.bincount(cell, minlength=cell_count)
+    votes = np.bincount(cell.ravel(), minlength=cell_count)
 
     # Unique keys (votes first, then the lower cell index) make the local maxima unambiguous.
     key = votes * cell_count + (cell_count - 1 - np.arange(cell_count))
     key = key.reshape(theta_bin_count, rho_bin_count)
     neighbourhood_max = _max_filter_columns(
-        _max_filter_wrapping_rows(key, HOUGH_SUPPRESSION_THETA_BINS),
+        _max_filter_wrapping_rows(key, HOUGH_SUPPRESSION_THETA_BINS + spread),
         HOUGH_SUPPRESSION_RHO_BINS, fill=-1,
     )
     is_peak = (key == neighbourhood_max).ravel() & (votes >= max(int(min_votes), 1))
@@ -259,8 +275,24 @@ def hough_lines(
     peak_cells = peak_cells[np.argsort(-key.ravel()[peak_cells], kind="stable")]
     if max_lines is not None:
         peak_cells = peak_cells[:max_lines]
-    return _refine_lines(peak_cells, votes, rho_bin_count, rho_offset, rho_step, theta_step_deg,
-                         theta_bin, x, y, edges.magnitude[rows, cols])
+    refined = _refine_lines(peak_cells, votes, rho_bin_count, rho_offset, rho_step,
+                            theta_step_deg, theta_bin, x, y, edges.magnitude[rows, cols],
+                            max(spread, 1))
+    return _drop_duplicate_lines(refined, theta_step_deg * (spread + 1), 2.0 * rho_step)
+
+
+def _drop_duplicate_lines(lines: list[Line], theta_tolerance_deg: float,
+                          rho_tolerance: float) -> list[Line]:
+    """Keep the strongest of lines that refined to the same line (a loop over lines)."""
+    kept: list[Line] = []
+    for line in lines:  # strongest first
+        if not any(
+            abs((line.theta_deg - other.theta_deg + 180.0) % 360.0 - 180.0) <= theta_tolerance_deg
+            and abs(line.rho - other.rho) <= rho_tolerance
+            for other in kept
+        ):
+            kept.append(line)
+    return kept
 
 
 def _weighted_line_fit(
@@ -289,19 +321,19 @@ def _weighted_line_fit(
 def _refine_lines(
     peak_cells: np.ndarray, votes: np.ndarray, rho_bin_count: int, rho_offset: int,
     rho_step: float, theta_step_deg: float, theta_bin: np.ndarray, x: np.ndarray, y: np.ndarray,
-    magnitude: np.ndarray,
+    magnitude: np.ndarray, spread_bins: int = 1,
 ) -> list[Line]:
     """Refined ``rho``, ``theta`` and end points of the Hough lines of ``peak_cells``.
 
-    Voters of a line: the edge pixels of its cell's orientation bin and the two neighbouring
-    bins that lie within 1.5 px (at least half a rho bin) of the line. They are first taken
-    around the cell's own line, fitted (total least squares weighted by gradient magnitude:
-    a blurred or anti-aliased edge is two or three pixels thick and the weights put the line
-    where the grey level changes most; a sharp step lands half-way between its two pixel
-    columns), then taken again around the fitted line and refitted, twice. The second and
-    third passes matter where the Sobel orientation is biased by a degree or so (oblique
-    anti-aliased edges): the cell then sits off-centre on the edge and its first voters are
-    one-sided. A loop over lines; each pass is vectorized over the pixels of three bins.
+    Voters of a line: the edge pixels of its cell's orientation bin and the ``spread_bins``
+    neighbouring bins on either side that lie within 1.5 px (at least half a rho bin) of the
+    line. They are first taken around the cell's own line, fitted (total least squares weighted
+    by gradient magnitude: a blurred or anti-aliased edge is two or three pixels thick and the
+    weights put the line where the grey level changes most; a sharp step lands half-way between
+    its two pixel columns), then taken again around the fitted line and refitted, twice. The
+    second and third passes matter where the Sobel orientation is biased by a degree or so
+    (oblique anti-aliased edges): the cell then sits off-centre on the edge and its first voters
+    are one-sided. A loop over lines; each pass is vectorized over the pixels of three bins.
     """
     theta_bin_count = _orientation_bin_count(theta_step_deg)
     pixel_order = np.argsort(theta_bin, kind="stable")
@@ -314,7 +346,7 @@ def _refine_lines(
         theta, rho = cell_theta, (peak_rho_bin - rho_offset) * rho_step
         nearby = np.concatenate([
             pixel_order[bin_starts[b]:bin_starts[b + 1]]
-            for b in _compatible_bins(peak_theta_bin, 1, theta_bin_count)
+            for b in _compatible_bins(peak_theta_bin, spread_bins, theta_bin_count)
         ])
         near_x, near_y, near_weight = x[nearby], y[nearby], magnitude[nearby].astype(np.float64)
         for _ in range(3):  # the cell's line, then the fitted one twice
@@ -358,6 +390,7 @@ class Template:
     orientation_step_deg: float
     offsets: NDArray[np.float64]  # (edge_count, 2): dx, dy
     orientation_bins: NDArray[np.int64]  # (edge_count,), ascending
+    orientation_deg: NDArray[np.float32]  # (edge_count,): each entry's gradient orientation
     bin_starts: NDArray[np.int64]  # (bin_count + 1,)
 
     @property
@@ -403,6 +436,7 @@ def build_template(
         orientation_step_deg=float(orientation_step_deg),
         offsets=offsets[order],
         orientation_bins=sorted_bins,
+        orientation_deg=edges.orientation_deg[rows, cols][order],
         bin_starts=np.searchsorted(sorted_bins, np.arange(bin_count + 1)).astype(np.int64),
     )
 
@@ -411,8 +445,9 @@ def build_template(
 class Match:
     """Where a template was found: its reference point (box centre) ``(x, y)`` at ``scale``.
 
-    ``votes``: how many model edge pixels voted for this place (each counted at most once),
-    ``score = votes / template.edge_count`` in ``[0, 1]``: the fraction of the model found.
+    ``votes``: how many model edge pixels were found at this place, each counted at most once
+    (see :func:`match_template`); ``score = votes / template.edge_count`` in ``[0, 1]``: the
+    fraction of the model found.
     """
 
     x: float
@@ -450,19 +485,21 @@ def match_template(
     on a whole pixel is lopsided when the true centre lies between pixels; see
     :func:`_peak_votes`). The scale is the peak's, one of ``scales``.
 
-    Score: the votes of a place are counted again with each model entry counted at most once
-    -- an entry counts when some image edge pixel of a compatible orientation bin voted
-    through it into the 3x3 window -- so ``score = votes / edge_count`` is the fraction of
-    the model found, in ``[0, 1]``, whatever ``tol`` and edge thickness (plain vote counts
-    would exceed ``edge_count``: two-pixel-thick edges and neighbouring bins vote several
-    times for the same place). Matches with ``score >= min_score`` come sorted by score
-    (descending), at most ``max_matches``.
+    Score: each model edge pixel counts at most once -- as found when, with the reference
+    point at the match, an image edge pixel lies in the 3x3 window around where the pixel
+    should be and its gradient orientation is within 1.5 bins (6 degrees by default) of the
+    model pixel's -- so ``score = votes / edge_count`` is the fraction of the model found, in
+    ``[0, 1]``, whatever ``tol`` and edge thickness (plain vote counts would exceed
+    ``edge_count``: two-pixel-thick edges and neighbouring bins vote several times for the
+    same place). Comparing angles rather than bins keeps the score free of bin boundaries.
+    Matches with ``score >= min_score`` come sorted by score (descending), at most
+    ``max_matches``.
 
-    ``tol = 1`` (default, with the 4-degree bins of :func:`build_template`) accepts image and
-    model orientations up to about 6 degrees apart, so Sobel orientation noise and bin
-    boundaries do not lose votes: a clean copy of the model scores about 0.9 - 0.97.
-    ``tol = 0`` casts a third of the votes (up to twice as fast) but a clean copy scores only
-    about 0.6 - 0.8, pixels near a bin boundary landing on the wrong side of it.
+    ``tol = 1`` (default) lets image and model orientations differ by up to a bin and a
+    half: with the 4-degree bins of :func:`build_template` a residual rotation of a few
+    degrees costs few votes, and so do horizontal edges (90 and 270 deg are bin boundaries,
+    as 4 does not divide 90). ``tol = 0`` casts a third of the votes (up to twice as fast);
+    pair it with a bin width that divides 90 (e.g. 3, 5 or 6 degrees).
     """
     if orientation_tolerance_bins < 0:
         raise ValueError("orientation_tolerance_bins must not be negative")
@@ -529,8 +566,8 @@ def match_template(
     kept_scale, kept_y, kept_x = peak_scale[kept], peak_y[kept], peak_x[kept]
 
     model_votes, centre_x, centre_y = _peak_votes(
-        kept_scale, kept_y, kept_x, scale_values, rows, cols, image_bins,
-        template, orientation_tolerance_bins, height, width, margin,
+        kept_scale, kept_y, kept_x, scale_values, rows, cols,
+        edges.orientation_deg[rows, cols], template, height, width, margin,
     )
 
     matches = [
@@ -595,32 +632,32 @@ def _ght_votes(
 
 def _peak_votes(
     peak_scale: np.ndarray, peak_y: np.ndarray, peak_x: np.ndarray, scale_values: np.ndarray,
-    rows: np.ndarray, cols: np.ndarray, image_bins: np.ndarray, template: Template,
-    tolerance_bins: int, height: int, width: int, margin: int,
+    rows: np.ndarray, cols: np.ndarray, orientation_deg: np.ndarray, template: Template,
+    height: int, width: int, margin: int,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Model entries found at each peak (each counted once) and the peak's sub-pixel centre.
+    """Model edge pixels found at each peak (each counted once) and the peak's sub-pixel centre.
 
-    With the reference point at ``c``, R-table entry ``j`` at scale ``s`` predicts a model
-    edge pixel at ``c - s * offset_j``; it is found if an image edge pixel of a compatible
-    orientation bin lies in the 3x3 window around that prediction (rounded). Those pixels are
-    exactly the ones that voted through entry ``j`` into the 3x3 window of ``c``.
+    With the reference point at ``c``, model entry ``j`` at scale ``s`` predicts an edge pixel
+    at ``c - s * offset_j``; it is found if an image edge pixel (``rows``, ``cols``,
+    ``orientation_deg``) whose gradient orientation is within ``GHT_FOUND_ORIENTATION_BINS``
+    bin widths of the entry's lies in the 3x3 window around that prediction (rounded): such
+    pixels voted (through ``j`` or an entry of a neighbouring bin) into the 3x3 window of
+    ``c``. Comparing angles, not bins, keeps the count free of bin boundaries and of the
+    voting tolerance.
 
     The centre starts at the integer peak and moves, three times, to the centroid of those
-    votes at their exact positions ``pixel + s * offset_j`` (the first move is the
+    pixels' votes at their exact positions ``pixel + s * offset_j`` (the first move is the
     vote-weighted centroid of the peak's 3x3 window; the next ones re-centre the window,
     which removes the pull of a window centred up to half a pixel off the true centre).
-    Returns the entry counts at the final centres and the centres ``x``, ``y``.
+    Returns the counts at the final centres and the centres ``x``, ``y``.
     """
-    bin_count = template.bin_count
     pad = margin + 8
     map_width = width + 2 * pad
-    # 0: no edge pixel; b + 1: an edge pixel of orientation bin b.
-    bin_map = np.zeros((height + 2 * pad) * map_width, np.int32)
-    bin_map[(rows + pad) * map_width + cols + pad] = image_bins + 1
-    compatible_table = np.zeros((bin_count, bin_count + 1), bool)
-    for b in range(bin_count):  # a loop over orientation bins
-        compatible_table[b, np.array(_compatible_bins(b, tolerance_bins, bin_count)) + 1] = True
-    entry_row = (template.orientation_bins * (bin_count + 1))[None, :, None]
+    # Orientation of each edge pixel; far outside any tolerance where there is no edge.
+    orientation_map = np.full((height + 2 * pad) * map_width, np.nan, np.float32)
+    orientation_map[(rows + pad) * map_width + cols + pad] = orientation_deg
+    entry_orientation = template.orientation_deg[None, :, None]
+    tolerance = np.float32(GHT_FOUND_ORIENTATION_BINS * template.orientation_step_deg)
 
     step = np.array([-1, 0, 1])
     window_dx, window_dy = np.tile(step, 3), np.repeat(step, 3)
@@ -635,8 +672,10 @@ def _peak_votes(
                 + nearest_x.astype(np.int64) + pad)
         # |scale * offset| <= margin - 2 and each move is at most 1.5 px: predictions stay
         # in the padded map. The clip is only a guard against out-of-bounds indexing.
-        np.clip(look, map_width + 1, bin_map.size - map_width - 2, out=look)
-        voted = compatible_table.ravel()[entry_row + bin_map[look[..., None] + window_offset]]
+        np.clip(look, map_width + 1, orientation_map.size - map_width - 2, out=look)
+        difference = np.abs(orientation_map[look[..., None] + window_offset] - entry_orientation)
+        with np.errstate(invalid="ignore"):  # NaN (no edge pixel) compares False
+            voted = (difference <= tolerance) | (difference >= 360 - tolerance)  # (p, e, 9)
         votes_of_entry = voted.sum(axis=2)  # (peaks, entries)
         if iteration == 3:
             break

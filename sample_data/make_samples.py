@@ -3,7 +3,8 @@
     python sample_data/make_samples.py
 
 1. ``draw_texture.py`` draws the frontal corridor wall (``corridor_wall.png``, ``.json``).
-2. ``gsrwt render`` renders it as a pan-tilt camera sees it: the thesis's settings (320x240,
+2. The knob and peek-window models are cut from it (``templates/``), and
+   ``gsrwt render`` renders it as a pan-tilt camera sees it: the thesis's settings (320x240,
    f = 280 px; pan/tilt 0/30, 15/30, 30/15, 30/30 and the over-decompressed 45/30, Table 5.1
    and Fig. 5.2) and larger views (1280x960, several focal lengths, negative angles), into
    ``views/`` with their sidecar as both ``views.csv`` and ``views.yaml``.
@@ -15,6 +16,7 @@ Everything is made by the project's own code; running it again gives the same fi
 
 from __future__ import annotations
 
+import json
 import subprocess
 import sys
 import tempfile
@@ -25,6 +27,7 @@ import numpy as np
 
 HERE = Path(__file__).resolve().parent
 VIEWS = HERE / "views"
+TEMPLATES = HERE / "templates"
 PICTURE = HERE.parent / "docs" / "sample.png"
 
 # name, pan, tilt, focal, width, height
@@ -47,8 +50,23 @@ def gsrwt(*args: str) -> None:
     subprocess.run([sys.executable, "-m", "gsrwt_cli", *args], check=True)
 
 
+def cut_templates() -> None:
+    """The knob and peek-window models, cut once from the frontal texture (thesis Sec. 5.2.2:
+    boxes of 40x100 and 120x90 centred on the object)."""
+    texture = cv2.imread(str(HERE / "corridor_wall.png"))
+    truth = json.loads((HERE / "corridor_wall.json").read_text())
+    TEMPLATES.mkdir(exist_ok=True)
+    for name in ("knob", "window"):
+        (col, row), (width, height) = truth[name]["centre"], truth[name]["box"]
+        # "centre" is in pixel-edge coordinates: the box spans [col - w/2, col + w/2).
+        left, top = round(col - width / 2), round(row - height / 2)
+        cut = texture[top : top + height, left : left + width]
+        cv2.imwrite(str(TEMPLATES / f"{name}.png"), cut, [cv2.IMWRITE_PNG_COMPRESSION, 9])
+
+
 def main() -> None:
     subprocess.run([sys.executable, str(HERE / "draw_texture.py")], check=True)
+    cut_templates()
     VIEWS.mkdir(exist_ok=True)
     for stale in VIEWS.iterdir():
         stale.unlink()

@@ -100,7 +100,8 @@ def cut_out(image: np.ndarray, x: float, y: float, box: tuple[int, int]) -> np.n
     return image[int(top):int(top) + height, int(left):int(left) + width].copy()
 
 
-def angle_between_deg(a: float, b: float, period: float = 360.0) -> float:
+def angle_between_deg(a, b, period: float = 360.0):
+    """Smallest difference between angles (degrees), for numbers or arrays."""
     return abs((a - b + period / 2) % period - period / 2)
 
 
@@ -126,7 +127,7 @@ def test_gradient_orientation_points_from_dark_to_light(dark, expected_deg):
     assert edges.mask.sum() == 2 * (38 if dark in ("left", "right") else 48)
     orientations = edges.orientation_deg[edges.mask]
     assert np.all((orientations >= 0) & (orientations < 360))
-    assert np.all([angle_between_deg(o, expected_deg) < 1e-3 for o in orientations])
+    assert np.all(angle_between_deg(orientations, expected_deg) < 1e-3)
 
 
 def test_edge_threshold_and_border():
@@ -214,6 +215,23 @@ def test_oblique_edge_at_30_degrees():
     assert angle_between_deg(line.theta_deg, 300.0) < 1.0
     assert line.rho == pytest.approx(-float(point @ normal), abs=0.5)
     assert line.length > 200  # the edge crosses the whole image (~ 277 px)
+
+
+def test_near_vertical_edge_is_one_line_across_the_0_360_seam():
+    # Normal at 359 deg: its pixels vote in the bins of 358 and 0 deg, which are neighbours.
+    normal_deg = 359.0
+    normal = np.array([math.cos(math.radians(normal_deg)), math.sin(math.radians(normal_deg))])
+    direction = np.array([-normal[1], normal[0]])
+    point = np.array([80.4, 60.0])
+    far = 1000.0
+    dark_side = np.array([point - far * direction, point + far * direction,
+                          point + far * direction - far * normal,
+                          point - far * direction - far * normal])
+    image = paint(np.full((120, 160), 200), [(dark_side, 50)])
+    lines = hough_lines(image, min_votes=15)  # low: the 358-deg bin holds a peak of its own
+    assert len(lines) == 1
+    assert angle_between_deg(lines[0].theta_deg, normal_deg) < 0.5
+    assert lines[0].rho == pytest.approx(float(point @ normal), abs=0.3)
 
 
 def test_flat_and_gently_shaded_images_have_no_lines():
@@ -305,6 +323,14 @@ def test_whole_pixel_moves_are_found_to_a_fraction_of_a_pixel(template_name, req
     best = match_template(paint(wall(7), place(shapes, x, y)), template)[0]
     assert best.scale == 1.0
     assert math.hypot(best.x - x, best.y - y) < 0.1
+
+
+def test_exact_orientation_bins_also_find_the_knob(knob_template):
+    x, y = 421.3, 287.6
+    image = paint(wall(2), place(KNOB, x, y))
+    best = match_template(image, knob_template, orientation_tolerance_bins=0)[0]
+    assert best.scale == 1.0 and math.hypot(best.x - x, best.y - y) < 1.0
+    assert best.score > 0.8  # the score does not depend on the voting tolerance
 
 
 def test_matches_are_distinct_places(window_template):

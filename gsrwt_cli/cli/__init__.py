@@ -6,6 +6,7 @@ import click
 
 from .. import __version__
 from .gaze import gaze, track
+from .landmarks import lines, match
 from .params import params
 from .rectify import rectify
 from .render import render
@@ -50,3 +51,5 @@ main.add_command(rectify)
 main.add_command(render)
 main.add_command(gaze)
 main.add_command(track)
+main.add_command(lines)
+main.add_command(match)

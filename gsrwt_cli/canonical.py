@@ -1,0 +1,64 @@
+"""Canonical views of image files for landmark search: rectified if parameters are known.
+
+``gsrwt lines`` and ``gsrwt match`` work on frontal views (thesis Sec. 5.2.2). An image with
+camera parameters (the same sources as ``gsrwt rectify``) is rectified first, and what is
+found there is mapped back to its own pixels; an image with none is taken as already frontal.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path, PurePosixPath
+from typing import Any
+
+import numpy as np
+
+from .batch import Source, parameters_for
+from .geometry import Matrix, map_points
+from .imaging import ImageError, read_image
+from .rectify import rectify_image
+from .sidecar import RecordError, Sidecar, view_from_values
+
+
+@dataclass(frozen=True)
+class CanonicalView:
+    """An image's frontal view and, when it was rectified, the map from source pixels to it."""
+
+    path: Path
+    pixels: np.ndarray
+    canonical_from_source: Matrix | None  # None: the image was frontal already
+
+    def to_source(self, points: np.ndarray) -> np.ndarray | None:
+        """``(N, 2)`` canonical pixels in the original image, or None if there is no map."""
+        if self.canonical_from_source is None:
+            return None
+        return map_points(np.linalg.inv(self.canonical_from_source), points)
+
+
+def canonical_views(
+    paths: list[Path], sidecar: Sidecar | None, fallback: dict[str, Any]
+) -> Iterator[CanonicalView | tuple[Path, str]]:
+    """Each image's canonical view, or ``(path, reason)`` when it cannot be read or rectified."""
+    for path in paths:
+        values, where, problem = parameters_for(
+            Source(path, PurePosixPath(path.name)), sidecar, fallback
+        )
+        try:
+            image = read_image(path)
+        except ImageError as error:
+            yield path, str(error)
+            continue
+        if problem is not None and problem.startswith("no parameters"):
+            yield CanonicalView(path, image, None)
+            continue
+        if problem is not None:
+            yield path, problem
+            continue
+        try:
+            view = view_from_values(values or {}, where)
+            frontal, info = rectify_image(image, view)
+        except (RecordError, ValueError) as error:
+            yield path, str(error)
+            continue
+        yield CanonicalView(path, frontal, info.homography)
