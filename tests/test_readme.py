@@ -25,7 +25,8 @@ def sh_blocks(text: str) -> list[list[str]]:
 
 
 def readme_commands() -> list[str]:
-    """Every gsrwt command line in the README's sh blocks (the part after `pip ... &&`)."""
+    """Every gsrwt command line in the README's sh blocks (the part after `pip ... &&`);
+    the development commands are run by :func:`test_development_commands_run`."""
     commands = []
     for block in sh_blocks(README):
         for line in block:
@@ -93,3 +94,29 @@ def test_every_readme_command_runs(tmp_path):
     assert (tmp_path / "view.yaml").is_file()
     assert (tmp_path / "view-rectified" / "view.png").is_file()
     assert len(list((tmp_path / "from-stdin" / "sample_data" / "views").glob("*.png"))) == 4
+
+
+def test_development_commands_run(tmp_path):
+    """The README's development block: benchmarks (small), sample regeneration, lint."""
+    (block,) = [b for b in sh_blocks(README) if any("make_samples" in line for line in b)]
+    copy = tmp_path / "repo"
+    shutil.copytree(ROOT, copy, ignore=shutil.ignore_patterns(".git", "rectified", ".venv",
+                                                              "__pycache__", "*.egg-info"))
+    environment = {**os.environ, "PATH": f"{Path(sys.executable).parent}{os.pathsep}"
+                   f"{os.environ.get('PATH', '')}"}
+    for line in block:
+        command = line.replace("--images 64", "--images 2")  # the same script, two images
+        command = command.replace("python ", f"{sys.executable} ", 1)
+        result = subprocess.run(["bash", "-c", command], cwd=copy, env=environment,
+                                capture_output=True, text=True, timeout=600)
+        assert result.returncode == 0, f"{command}\n{result.stdout}\n{result.stderr}"
+        if "bench_rectify" in command:
+            assert "gsrwt time / I/O floor time:" in result.stdout
+            assert "gsrwt worker peak memory:" in result.stdout
+        if "bench_match" in command:
+            assert "both templates on one 640x480 view:" in result.stdout
+    # Regenerating the sample data gives the committed files back.
+    for name in ("corridor_wall.png", "corridor_wall.json", "views/views.csv",
+                 "views/views.yaml", "templates/knob.png", "templates/window.png"):
+        assert (copy / "sample_data" / name).read_bytes() == (
+            ROOT / "sample_data" / name).read_bytes(), name

@@ -269,6 +269,9 @@ def test_depths_channels_and_unusual_names(tmp_path):
     result = rectify(str(folder), "--pan", "15", "--tilt", "30", "--focal", "280",
                      "-o", str(tmp_path / "out"), "-j", "1")
     assert result.exit_code == 0, result.output
+    assert "6 ok, 0 skipped, 0 failed" in result.stderr
+    table = read_table(tmp_path / "out" / "gsrwt.csv")
+    assert sorted(table) == sorted(images) and {r["status"] for r in table.values()} == {"ok"}
     expected, seen = expected_rectified(TEXTURE, pan, tilt, focal, width, height, cx, cy,
                                         DISTANCE, centre)
     for name, image in images.items():
@@ -295,6 +298,7 @@ def test_rerun_skips_and_overwrite_replaces(tmp_path):
     write_image(folder / "b.png", image[::-1].copy())
     args = [str(folder), "--pan", "15", "--tilt", "30", "--focal", "280", "-o",
             str(tmp_path / "out"), "-j", "1"]
+    before = snapshot(folder)
     assert rectify(*args).exit_code == 0
     output = tmp_path / "out" / "a.png"
     first = digest(output)
@@ -308,8 +312,11 @@ def test_rerun_skips_and_overwrite_replaces(tmp_path):
     assert output.read_bytes() == b"stale"
     forced = rectify(*args, "--overwrite")
     assert forced.exit_code == 0 and "2 ok, 0 skipped" in forced.stderr
+    table = read_table(tmp_path / "out" / "gsrwt.csv")
+    assert table["a.png"]["status"] == "ok" and table["b.png"]["status"] == "ok"
     assert digest(output) == first
     assert not list((tmp_path / "out").glob(".*"))  # no temporary files left behind
+    assert snapshot(folder) == before
 
 
 @pytest.mark.parametrize("recursive", [False, True])
@@ -339,6 +346,7 @@ def test_paths_from_stdin_keep_their_tree(tmp_path, gsrwt):
         (tmp_path / sub).mkdir(parents=True, exist_ok=True)
         write_image(tmp_path / sub / "x.jpg", smooth_texture(60, 80, 3))
     listing = "./a/x.jpg\n./a/b/x.jpg\n\n./a/missing.jpg\n"
+    before = snapshot(tmp_path / "a")
     result = gsrwt("rectify", "-", "-o", "out", "--pan", "5", "--tilt", "5", "--focal", "100",
                    stdin=listing, cwd=tmp_path)
     assert result.returncode == 1
@@ -346,6 +354,8 @@ def test_paths_from_stdin_keep_their_tree(tmp_path, gsrwt):
     assert (tmp_path / "out/a/x.jpg").is_file() and (tmp_path / "out/a/b/x.jpg").is_file()
     rows = list(csv.DictReader(io.StringIO((tmp_path / "out/gsrwt.csv").read_text("utf-8"))))
     assert [r["status"] for r in rows] == ["ok", "ok", "error"]
+    assert rows[2]["error"] == "no such file"
+    assert snapshot(tmp_path / "a") == before
 
 
 def test_recursive_mirrors_the_tree_and_jobs_agree(tmp_path):
