@@ -9,6 +9,7 @@ import tempfile
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
+from typing import IO
 
 import cv2
 import numpy as np
@@ -380,12 +381,13 @@ def encode_image(image: np.ndarray | Working, extension: str, quality: int = 95)
     return encoded.tobytes()
 
 
-def write_atomic(path: str | Path, data: bytes) -> None:
-    """Write ``data`` to ``path`` so that no reader ever sees a partial file.
+@contextlib.contextmanager
+def open_atomic(path: str | Path, mode: str = "wb", **kwargs: object) -> Iterator[IO]:
+    """A file that appears at ``path`` whole, when the ``with`` block ends without error.
 
-    The bytes go to a hidden temporary file in the same directory, which is then renamed
-    over ``path`` (``os.replace`` is atomic within a file system). On failure the temporary
-    file is removed and ``path`` is untouched.
+    It is written as a hidden temporary file in the same directory, then renamed over
+    ``path`` (``os.replace`` is atomic within a file system), so no reader ever sees a
+    partial file. On error the temporary file is removed and ``path`` is untouched.
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -393,11 +395,17 @@ def write_atomic(path: str | Path, data: bytes) -> None:
         dir=path.parent, prefix=f".{path.name}.", suffix=".part"
     )
     try:
-        with os.fdopen(descriptor, "wb") as handle:
-            handle.write(data)
+        with os.fdopen(descriptor, mode, **kwargs) as handle:
+            yield handle
         os.chmod(temporary, 0o666 & ~_UMASK)
         os.replace(temporary, path)
     except BaseException:
         with contextlib.suppress(FileNotFoundError):
             os.unlink(temporary)
         raise
+
+
+def write_atomic(path: str | Path, data: bytes) -> None:
+    """Write ``data`` to ``path`` whole or not at all (:func:`open_atomic`)."""
+    with open_atomic(path, "wb") as handle:
+        handle.write(data)

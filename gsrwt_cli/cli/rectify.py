@@ -6,7 +6,6 @@ import contextlib
 import math
 import os
 import sys
-import tempfile
 from collections.abc import Iterator
 from pathlib import Path, PurePosixPath
 from typing import IO, Any
@@ -23,7 +22,13 @@ from ..batch import (
     source_from_listed_path,
     sources_from_directory,
 )
-from ..imaging import INTERPOLATIONS, ImageError, canonical_extension, check_writable
+from ..imaging import (
+    INTERPOLATIONS,
+    ImageError,
+    canonical_extension,
+    check_writable,
+    open_atomic,
+)
 from ..sidecar import SidecarError, load_sidecar
 from ..tables import TableWriter, format_from_extension
 from .options import InputError, view_defaults, view_options
@@ -119,23 +124,12 @@ def refuse_unsafe_outputs(
 
 @contextlib.contextmanager
 def open_table(path: str) -> Iterator[IO[str]]:
-    """The table's stream: stdout for ``-``, else a temporary file renamed into place at the end."""
+    """The table's stream: stdout for ``-``, else a file that appears whole at the end."""
     if path == "-":
         yield sys.stdout
-        return
-    target = Path(path)
-    target.parent.mkdir(parents=True, exist_ok=True)
-    descriptor, temporary = tempfile.mkstemp(
-        dir=target.parent, prefix=f".{target.name}.", suffix=".part"
-    )
-    try:
-        with os.fdopen(descriptor, "w", encoding="utf-8", newline="") as stream:
+    else:
+        with open_atomic(path, "w", encoding="utf-8", newline="") as stream:
             yield stream
-        os.chmod(temporary, 0o644)
-        os.replace(temporary, target)
-    finally:
-        if os.path.exists(temporary):
-            os.unlink(temporary)
 
 
 @click.command()
