@@ -1,5 +1,5 @@
 """``python -m gsrwt_cli`` runs the ``gsrwt`` command."""
 
-from .cli import main
+from .cli import run
 
-main(prog_name="gsrwt")
+run()

@@ -105,7 +105,8 @@ def test_development_commands_run(tmp_path):
     environment = {**os.environ, "PATH": f"{Path(sys.executable).parent}{os.pathsep}"
                    f"{os.environ.get('PATH', '')}"}
     for line in block:
-        command = line.replace("--images 64", "--images 2")  # the same script, two images
+        # The same scripts, on two images once.
+        command = line.replace("--images 64 --repeat 3", "--images 2 --repeat 1")
         command = command.replace("python ", f"{sys.executable} ", 1)
         result = subprocess.run(["bash", "-c", command], cwd=copy, env=environment,
                                 capture_output=True, text=True, timeout=600)

@@ -53,3 +53,15 @@ main.add_command(gaze)
 main.add_command(track)
 main.add_command(lines)
 main.add_command(match)
+
+
+def run() -> None:
+    """The ``gsrwt`` console script: :data:`main` in a process of its own."""
+    global started_as_command
+    started_as_command = True
+    main(prog_name="gsrwt")
+
+
+#: True in a process the ``gsrwt`` command started (not in a library user's or a test's):
+#: there the batch may fork its workers from the main process, which has run no OpenCV code.
+started_as_command = False

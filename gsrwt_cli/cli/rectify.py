@@ -13,6 +13,7 @@ from typing import IO, Any
 import click
 from tqdm import tqdm
 
+from .. import cli as cli_package
 from ..batch import (
     RECTIFY_COLUMNS,
     Settings,
@@ -240,6 +241,7 @@ def rectify(
     processes = jobs or os.cpu_count() or 1
     if not dry_run:
         outdir.mkdir(parents=True, exist_ok=True)
+    tqdm.monitor_interval = 0  # no monitor thread: workers may fork from this process
     progress = tqdm(
         total=len(job_list), unit="img", file=sys.stderr, dynamic_ncols=True,
         disable=quiet or not sys.stderr.isatty(),
@@ -254,7 +256,8 @@ def rectify(
             progress.update(1)
 
         try:
-            counts = run_batch(job_list, settings, processes, on_row)
+            counts = run_batch(job_list, settings, processes, on_row,
+                               fork_from_caller=cli_package.started_as_command)
         finally:
             writer.close()
             progress.close()
