@@ -121,3 +121,13 @@ def test_development_commands_run(tmp_path):
                  "views/views.yaml", "templates/knob.png", "templates/window.png"):
         assert (copy / "sample_data" / name).read_bytes() == (
             ROOT / "sample_data" / name).read_bytes(), name
+
+
+def test_python_api_example_runs(capsys, monkeypatch):
+    (block,) = re.findall(r"```python\n(.*?)```", README, re.S)
+    monkeypatch.chdir(ROOT)
+    exec(compile(block, "README.md", "exec"), {})
+    printed = capsys.readouterr().out.splitlines()
+    assert printed[0].startswith("(320, 240)")
+    delta, shift, gamma = (float(v) for v in printed[-1].split())
+    assert (round(delta, 2), round(shift, 2), round(gamma, 2)) == (28.19, 427.46, -24.15)

@@ -473,3 +473,48 @@ def test_usage_errors_exit_2_before_writing(tmp_path, gsrwt, args, message):
     assert message in result.stderr
     assert "Traceback" not in result.stderr
     assert not (tmp_path / "OUT").exists()
+
+
+def run_on_terminal(args: list[str]) -> str:
+    """Run the installed gsrwt with a pseudo-terminal as stdin, stdout and stderr."""
+    import fcntl
+    import os
+    import pty
+    import struct
+    import subprocess
+    import termios
+
+    from conftest import GSRWT
+
+    master, slave = pty.openpty()
+    fcntl.ioctl(slave, termios.TIOCSWINSZ, struct.pack("HHHH", 40, 100, 0, 0))
+    process = subprocess.Popen([str(GSRWT), *args], stdin=slave, stdout=slave, stderr=slave)
+    os.close(slave)
+    output = b""
+    while True:
+        try:
+            chunk = os.read(master, 4096)
+        except OSError:  # the terminal closed with the process
+            break
+        if not chunk:
+            break
+        output += chunk
+    assert process.wait(timeout=120) == 0
+    os.close(master)
+    return output.decode(errors="replace")
+
+
+def test_progress_bar_only_on_a_terminal_and_not_with_quiet(tmp_path, gsrwt):
+    folder = tmp_path / "in"
+    folder.mkdir()
+    for index in range(3):
+        write_image(folder / f"{index}.png", smooth_texture(60, 80, index))
+    common = [str(folder), "--pan", "10", "--tilt", "10", "--focal", "100", "--overwrite"]
+    shown = run_on_terminal(["rectify", *common, "-o", str(tmp_path / "a")])
+    assert "3/3 [" in shown and "img/s]" in shown
+    assert "gsrwt: 3 ok, 0 skipped, 0 failed" in shown
+    quiet = run_on_terminal(["rectify", *common, "-o", str(tmp_path / "b"), "--quiet"])
+    assert "3/3" not in quiet and "gsrwt:" not in quiet
+    piped = gsrwt("rectify", *common, "-o", str(tmp_path / "c"))
+    table = tmp_path / "c" / "gsrwt.csv"
+    assert piped.stderr == f"gsrwt: 3 ok, 0 skipped, 0 failed; table: {table}\n"
