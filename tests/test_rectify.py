@@ -220,8 +220,12 @@ def test_vanishing_line_across_the_image_both_bbox_modes(tmp_path):
     frontal = rectify(str(folder), *common, "-o", str(tmp_path / "frontal"))
     full = rectify(str(folder), *common, "--bbox", "full", "-o", str(tmp_path / "full"))
     assert frontal.exit_code == 0 and full.exit_code == 0, frontal.output + full.output
+    for result, name in ((frontal, "frontal"), (full, "full")):
+        assert result.stderr == (f"gsrwt: 1 ok, 0 skipped, 0 failed; table: "
+                                 f"{tmp_path / name / 'gsrwt.csv'}\n")
     frontal_row = read_table(tmp_path / "frontal" / "gsrwt.csv")["p80.png"]
     full_row = read_table(tmp_path / "full" / "gsrwt.csv")["p80.png"]
+    assert frontal_row["status"] == full_row["status"] == "ok"
     assert frontal_row["horizon_in_image"] == "true"
     assert (int(frontal_row["out_width"]), int(frontal_row["out_height"])) == (width, height)
     full_size = int(full_row["out_width"]) * int(full_row["out_height"])
