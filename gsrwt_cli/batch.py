@@ -142,7 +142,10 @@ def parameters_for(
     and then from the command-line options.
     """
     if sidecar is not None:
-        record = sidecar.find(source.relative.as_posix())
+        try:
+            record = sidecar.find(source.relative.as_posix())
+        except SidecarError as error:
+            return None, str(sidecar.path), str(error)
         if record is not None:
             return record.merged(fallback), record.where, None
     beside = adjacent_yaml(source.path)

@@ -158,12 +158,21 @@ class Sidecar:
         self._by_name = by_name
 
     def find(self, relative_path: str) -> Record | None:
-        """The record for an image: an exact relative-path match, else a unique file-name match."""
+        """The record for an image: an exact relative-path match, else a unique file-name match.
+
+        Raises :class:`SidecarError` when only the file name matches, and several rows.
+        """
         key = _normalize(relative_path)
         if key in self._by_path:
             return self._by_path[key]
         candidates = self._by_name.get(PurePosixPath(key).name, [])
-        return candidates[0] if len(candidates) == 1 else None
+        if len(candidates) > 1:
+            rows = ", ".join(record.image for record in candidates)
+            raise SidecarError(
+                f"{self.path}: {PurePosixPath(key).name} matches several rows by file name "
+                f"({rows}); give the image's relative path"
+            )
+        return candidates[0] if candidates else None
 
 
 def _normalize(image: str) -> str:

@@ -522,3 +522,20 @@ def test_progress_bar_only_on_a_terminal_and_not_with_quiet(tmp_path, gsrwt):
     piped = gsrwt("rectify", *common, "-o", str(tmp_path / "c"))
     table = tmp_path / "c" / "gsrwt.csv"
     assert piped.stderr == f"gsrwt: 3 ok, 0 skipped, 0 failed; table: {table}\n"
+
+
+def test_rows_matching_only_by_an_ambiguous_file_name_are_an_error(tmp_path):
+    for sub in ("a", "b"):
+        (tmp_path / "in" / sub).mkdir(parents=True)
+        write_image(tmp_path / "in" / sub / "x.png", smooth_texture(60, 80, 1))
+    (tmp_path / "v.csv").write_text("image,pan,tilt,focal\nq/x.png,1,2,100\nr/x.png,3,4,100\n")
+    result = rectify(str(tmp_path / "in"), "-r", "--sidecar", str(tmp_path / "v.csv"), "-o",
+                     str(tmp_path / "out"), "-j", "1")
+    assert result.exit_code == 1
+    assert "x.png matches several rows by file name (q/x.png, r/x.png)" in result.stderr
+    (tmp_path / "v.csv").write_text("image,pan,tilt,focal\na/x.png,1,2,100\nb/x.png,3,4,100\n")
+    result = rectify(str(tmp_path / "in"), "-r", "--sidecar", str(tmp_path / "v.csv"), "-o",
+                     str(tmp_path / "out2"), "-j", "1")
+    assert result.exit_code == 0, result.output
+    table = list(csv.DictReader(io.StringIO((tmp_path / "out2" / "gsrwt.csv").read_text())))
+    assert [float(r["pan_deg"]) for r in table] == [1, 3]
