@@ -10,7 +10,7 @@ from __future__ import annotations
 import multiprocessing
 import os
 from collections.abc import Callable, Iterable, Iterator
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path, PurePosixPath
 from typing import Any
 
@@ -327,7 +327,6 @@ class Counts:
     ok: int = 0
     skipped: int = 0
     failed: int = 0
-    failures: list[str] = field(default_factory=list)
 
     def add(self, row: dict[str, Any]) -> None:
         if row["status"] == "ok":
@@ -336,7 +335,6 @@ class Counts:
             self.skipped += 1
         else:
             self.failed += 1
-            self.failures.append(row["image"])
 
 
 def run_batch(

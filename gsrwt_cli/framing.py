@@ -159,10 +159,6 @@ class Plan:
     frame: Frame
     homography: Matrix
 
-    @property
-    def size(self) -> tuple[int, int]:
-        return self.frame.size
-
 
 def plan_output(
     view: View,
