@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import sys
+from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -73,9 +74,17 @@ def _grey8(pixels: np.ndarray) -> np.ndarray:
     return cv2.cvtColor(_colour(pixels), cv2.COLOR_BGR2GRAY)
 
 
-def _finish(failures: int) -> None:
-    if failures:
-        sys.exit(1)
+def _readable(
+    views: Iterable[CanonicalView | tuple[Path, str]], failures: list[Path]
+) -> Iterator[CanonicalView]:
+    """The views that could be read (and rectified); the others are reported in one line each
+    and collected in ``failures``."""
+    for view in views:
+        if isinstance(view, tuple):
+            failures.append(view[0])
+            click.echo(f"Error: {view[0]}: {view[1]}", err=True)
+        else:
+            yield view
 
 
 @click.command()
@@ -109,12 +118,8 @@ def lines(images: tuple[Path, ...], sidecar: Path | None, edge_threshold: float,
     _draw_target(draw, images)
     views = _sources(images, sidecar, view_kwargs)
     writer = TableWriter(sys.stdout, LINES_COLUMNS, resolve_format(fmt))
-    failures = 0
-    for view in views:
-        if isinstance(view, tuple):
-            failures += 1
-            click.echo(f"Error: {view[0]}: {view[1]}", err=True)
-            continue
+    failures: list[Path] = []
+    for view in _readable(views, failures):
         found = hough_lines(_grey8(view.pixels), edge_threshold=edge_threshold,
                             theta_step_deg=theta_step, min_votes=min_votes)
         overlay = _colour(view.pixels) if draw is not None else None
@@ -133,7 +138,8 @@ def lines(images: tuple[Path, ...], sidecar: Path | None, edge_threshold: float,
         if overlay is not None:
             _save_overlay(draw, view, overlay)
     writer.close()
-    _finish(failures)
+    if failures:
+        sys.exit(1)
 
 
 def _parse_scales(text: str, steps: int) -> list[float]:
@@ -197,12 +203,8 @@ def match(images: tuple[Path, ...], templates: tuple[Path, ...], sidecar: Path |
             raise InputError(f"--template {path}: {error}") from None
     views = _sources(images, sidecar, view_kwargs)
     writer = TableWriter(sys.stdout, MATCH_COLUMNS, resolve_format(fmt))
-    failures = 0
-    for view in views:
-        if isinstance(view, tuple):
-            failures += 1
-            click.echo(f"Error: {view[0]}: {view[1]}", err=True)
-            continue
+    failures: list[Path] = []
+    for view in _readable(views, failures):
         grey = _grey8(view.pixels)
         overlay = _colour(view.pixels) if draw is not None else None
         for path, model in models:
@@ -223,4 +225,5 @@ def match(images: tuple[Path, ...], templates: tuple[Path, ...], sidecar: Path |
         if overlay is not None:
             _save_overlay(draw, view, overlay)
     writer.close()
-    _finish(failures)
+    if failures:
+        sys.exit(1)
