@@ -71,7 +71,8 @@ def _read(source: str) -> np.ndarray:
 
 def _write(target: str, image: np.ndarray) -> None:
     """gsrwt's own encode (JPEG quality 95) and atomic write."""
-    from gsrwt_cli.imaging import encode_image, write_atomic
+    from gsrwt_cli.imaging import encode_image
+    from gsrwt_cli.outputs import write_atomic
 
     write_atomic(target, encode_image(image, ".jpg", 95))
 

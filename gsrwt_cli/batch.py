@@ -24,8 +24,8 @@ from .imaging import (
     Scratch,
     check_writable,
     encode_image,
-    write_atomic,
 )
+from .outputs import write_atomic
 from .rectify import plan_image
 from .report import PARAMS_COLUMNS, params_row
 from .sidecar import (

@@ -1,4 +1,4 @@
-"""Image files and pixels: read any depth and channel layout, warp with OpenCV, write atomically."""
+"""Image files and pixels: read any depth and channel layout, warp with OpenCV, encode."""
 
 from __future__ import annotations
 
@@ -9,7 +9,6 @@ import tempfile
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
-from typing import IO
 
 import cv2
 import numpy as np
@@ -35,9 +34,6 @@ _WRITABLE: dict[str, tuple[frozenset[str], frozenset[int]]] = {
     ".webp": (frozenset({"uint8"}), frozenset({3, 4})),
 }
 _CANONICAL_EXTENSION = {".jpeg": ".jpg", ".jpe": ".jpg", ".tiff": ".tif"}
-
-_UMASK = os.umask(0)
-os.umask(_UMASK)
 
 # OpenCV's own warnings would break the one-line-per-problem promise.
 with contextlib.suppress(AttributeError):  # older OpenCV builds lack cv2.utils.logging
@@ -379,33 +375,3 @@ def encode_image(image: np.ndarray | Working, extension: str, quality: int = 95)
     if not ok:
         raise ImageError(f"OpenCV could not encode the image as {ext}")
     return encoded.tobytes()
-
-
-@contextlib.contextmanager
-def open_atomic(path: str | Path, mode: str = "wb", **kwargs: object) -> Iterator[IO]:
-    """A file that appears at ``path`` whole, when the ``with`` block ends without error.
-
-    It is written as a hidden temporary file in the same directory, then renamed over
-    ``path`` (``os.replace`` is atomic within a file system), so no reader ever sees a
-    partial file. On error the temporary file is removed and ``path`` is untouched.
-    """
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    descriptor, temporary = tempfile.mkstemp(
-        dir=path.parent, prefix=f".{path.name}.", suffix=".part"
-    )
-    try:
-        with os.fdopen(descriptor, mode, **kwargs) as handle:
-            yield handle
-        os.chmod(temporary, 0o666 & ~_UMASK)
-        os.replace(temporary, path)
-    except BaseException:
-        with contextlib.suppress(FileNotFoundError):
-            os.unlink(temporary)
-        raise
-
-
-def write_atomic(path: str | Path, data: bytes) -> None:
-    """Write ``data`` to ``path`` whole or not at all (:func:`open_atomic`)."""
-    with open_atomic(path, "wb") as handle:
-        handle.write(data)

@@ -18,8 +18,8 @@ from gsrwt_cli.imaging import (
     encode_image,
     read_image,
     warp_image,
-    write_atomic,
 )
+from gsrwt_cli.outputs import write_atomic
 
 
 def test_scratch_gives_the_same_pixels_as_fresh_arrays_across_shapes_and_types(tmp_path):

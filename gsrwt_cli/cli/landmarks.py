@@ -14,7 +14,7 @@ import numpy as np
 
 from ..batch import sources_from_directory
 from ..canonical import CanonicalView, canonical_views
-from ..imaging import ImageError, encode_image, read_image, write_atomic
+from ..imaging import ImageError, encode_image, read_image
 from ..landmarks import (
     DEFAULT_EDGE_THRESHOLD,
     DEFAULT_MIN_VOTES,
@@ -24,6 +24,7 @@ from ..landmarks import (
     hough_lines,
     match_template,
 )
+from ..outputs import write_atomic
 from ..sidecar import SidecarError, load_sidecar
 from ..tables import TableWriter
 from .options import InputError, format_option, resolve_format, view_defaults, view_options

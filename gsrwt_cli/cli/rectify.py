@@ -28,8 +28,8 @@ from ..imaging import (
     ImageError,
     canonical_extension,
     check_writable,
-    open_atomic,
 )
+from ..outputs import open_atomic
 from ..sidecar import SidecarError, load_sidecar
 from ..tables import TableWriter, format_from_extension
 from .options import InputError, view_defaults, view_options

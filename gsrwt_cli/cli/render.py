@@ -14,8 +14,8 @@ from ..imaging import (
     check_writable,
     encode_image,
     read_image,
-    write_atomic,
 )
+from ..outputs import write_atomic
 from ..render import render_view
 from ..sidecar import RecordError, SidecarError, format_sidecar, load_sidecar, view_from_values
 from .options import InputError, option_message, view_defaults, view_options

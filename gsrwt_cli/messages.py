@@ -1,0 +1,57 @@
+"""How user data appears in messages: on one line, escaped, and never longer than a bound.
+
+An error message quotes what it complains about, but a value from a file may be huge (a YAML
+alias bomb, a 400-digit number) or carry control characters (a file name with a newline).
+:func:`quote` and :func:`one_line` keep every message one readable line.
+"""
+
+from __future__ import annotations
+
+import re
+import reprlib
+from typing import Any
+
+#: Characters of a value quoted in a message, at most.
+QUOTE_LIMIT = 80
+#: Characters of a whole message line, at most.
+LINE_LIMIT = 2000
+
+_CONTROL = re.compile(r"[\x00-\x1f\x7f-\x9f\u2028\u2029]")
+
+
+def _escape(match: re.Match[str]) -> str:
+    char = match.group(0)
+    return {"\n": "\\n", "\r": "\\r", "\t": "\\t"}.get(char, f"\\x{ord(char):02x}")
+
+
+def escape_controls(text: str) -> str:
+    """``text`` with control characters (newlines included) written as escapes."""
+    return _CONTROL.sub(_escape, text)
+
+
+def shorten(text: str, limit: int) -> str:
+    """``text`` cut to ``limit`` characters, with an ellipsis and the length it had."""
+    if len(text) <= limit:
+        return text
+    return f"{text[:limit]}... ({len(text)} characters)"
+
+
+def quote(value: Any, limit: int = QUOTE_LIMIT) -> str:
+    """``value`` as a message quotes it: ``'text'``, escaped, at most ``limit`` characters."""
+    text = value if isinstance(value, str) else _bounded_repr(value, limit)
+    return "'" + shorten(escape_controls(text), limit) + "'"
+
+
+def _bounded_repr(value: Any, limit: int) -> str:
+    if isinstance(value, int) and not isinstance(value, bool):
+        digits = len(str(abs(value))) if abs(value) < 10**400 else None
+        if digits is None or digits > limit:
+            return f"an integer of {'over 400' if digits is None else digits} digits"
+    bounded = reprlib.Repr()  # bounded in depth and items: a nested value costs little
+    bounded.maxlevel, bounded.maxstring, bounded.maxother = 3, limit, limit
+    return bounded.repr(value)
+
+
+def one_line(text: str, limit: int = LINE_LIMIT) -> str:
+    """A message on one line: control characters escaped, at most ``limit`` characters."""
+    return shorten(escape_controls(str(text)), limit)

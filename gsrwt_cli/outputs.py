@@ -1,0 +1,155 @@
+"""Where gsrwt writes: files that appear whole, only inside the output the user named.
+
+Every file any command writes (images, sidecars, tables, drawings) goes through
+:func:`open_atomic`: a temporary file in the target's directory, renamed over the target when
+complete, so no reader ever sees a partial file. Temporary names carry the writer's process id
+(``.NAME.gsrwt-PID-XXXX.part``), so that a later run can remove those whose process is gone
+(:func:`remove_stale_temporaries`). Given the output ``root``, a write whose real location
+(symbolic links resolved) is not inside the root's real location is refused with
+:class:`OutsideOutputError`, before any directory is created.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import errno
+import os
+import re
+import tempfile
+from collections.abc import Iterator
+from pathlib import Path, PurePosixPath
+from typing import IO
+
+#: Temporary files of ours: ``.NAME.gsrwt-PID-RANDOM.part``.
+TEMPORARY_PATTERN = re.compile(r"^\..*\.gsrwt-(\d+)-[A-Za-z0-9_]+\.part$")
+
+
+class OutsideOutputError(ValueError):
+    """A file would be written outside the output the user named (``..``, absolute, symlink)."""
+
+
+def current_umask() -> int:
+    """The process's umask, read without changing it for longer than the call."""
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
+def relative_output(name: str) -> PurePosixPath:
+    """A relative path taken from user data (a sidecar's ``image`` column), checked.
+
+    Raises :class:`OutsideOutputError` for an absolute path, a ``..`` part, an empty name or
+    one with a NUL byte: such a name could point anywhere.
+    """
+    text = str(name).replace("\\", "/")
+    pure = PurePosixPath(text)
+    if "\x00" in text or not text.strip():
+        raise OutsideOutputError("not a usable file name")
+    if pure.is_absolute() or re.match(r"^[A-Za-z]:", text):
+        raise OutsideOutputError("is an absolute path; give a path relative to the output")
+    if ".." in pure.parts:
+        raise OutsideOutputError("has a '..' part, which would leave the output")
+    parts = [part for part in pure.parts if part != "."]
+    if not parts:
+        raise OutsideOutputError("not a usable file name")
+    return PurePosixPath(*parts)
+
+
+def _existing_ancestor(path: Path) -> Path:
+    while not os.path.lexists(path) and path != path.parent:
+        path = path.parent
+    return path
+
+
+def check_inside(root: str | Path, target: str | Path) -> None:
+    """Raise :class:`OutsideOutputError` unless ``target``'s directory lies inside ``root``.
+
+    The nearest existing ancestor of ``target``'s directory is resolved (symbolic links
+    followed) and must be ``root``'s real path or below it. The target itself may be a
+    symbolic link: :func:`open_atomic` replaces the link, never what it points to.
+    """
+    real_root = os.path.realpath(root)
+    parent = Path(os.path.abspath(target)).parent
+    real_parent = os.path.realpath(_existing_ancestor(parent))
+    if real_parent != real_root and not real_parent.startswith(real_root.rstrip(os.sep) + os.sep):
+        raise OutsideOutputError(
+            f"would be written outside the output {root} (through a symbolic link to "
+            f"{real_parent})"
+        )
+
+
+@contextlib.contextmanager
+def open_atomic(
+    path: str | Path, mode: str = "wb", *, root: str | Path | None = None, **kwargs: object
+) -> Iterator[IO]:
+    """A file that appears at ``path`` whole, when the ``with`` block ends without error.
+
+    It is written as a hidden temporary file in the same directory, then renamed over
+    ``path`` (``os.replace`` is atomic within a file system), so no reader ever sees a
+    partial file. On error (or interruption) the temporary file is removed and ``path`` is
+    untouched. ``root``: the output the user named; the file must lie inside it
+    (:func:`check_inside`), checked before and after the directories are made.
+    """
+    path = Path(path)
+    if root is not None:
+        check_inside(root, path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    if root is not None:
+        check_inside(root, path)
+    descriptor, temporary = tempfile.mkstemp(
+        dir=path.parent, prefix=f".{path.name}.gsrwt-{os.getpid()}-", suffix=".part"
+    )
+    try:
+        with os.fdopen(descriptor, mode, **kwargs) as handle:
+            yield handle
+        os.chmod(temporary, 0o666 & ~current_umask())
+        os.replace(temporary, path)
+    except BaseException:
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(temporary)
+        raise
+
+
+def write_atomic(path: str | Path, data: bytes, *, root: str | Path | None = None) -> None:
+    """Write ``data`` to ``path`` whole or not at all (:func:`open_atomic`)."""
+    with open_atomic(path, "wb", root=root) as handle:
+        handle.write(data)
+
+
+def _process_alive(pid: int) -> bool:
+    if pid == os.getpid():
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # someone else's live process
+        return True
+    except OSError as error:
+        return error.errno != errno.ESRCH
+    return True
+
+
+def remove_stale_temporaries(directory: str | Path, pids: set[int] | None = None) -> list[Path]:
+    """Remove our temporary files in ``directory`` whose writing process is gone.
+
+    ``pids``: remove only those of these processes (known dead, e.g. a killed worker),
+    whether or not the id has been reused since. Returns what was removed; a directory that
+    does not exist or cannot be listed has nothing to remove.
+    """
+    removed = []
+    try:
+        entries = list(os.scandir(directory))
+    except OSError:
+        return removed
+    for entry in entries:
+        match = TEMPORARY_PATTERN.match(entry.name)
+        if match is None:
+            continue
+        pid = int(match.group(1))
+        stale = pid in pids if pids is not None else not _process_alive(pid)
+        if stale and not entry.is_dir(follow_symlinks=False):
+            with contextlib.suppress(FileNotFoundError):
+                os.unlink(entry.path)
+                removed.append(Path(entry.path))
+    return removed
