@@ -8,11 +8,13 @@ Pixel coordinates are ``(col, row)`` with row growing downward and pixel centres
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from .geometry import GsrwtParameters, Matrix, gsrwt_parameters
+from .messages import quote
 
 
 class ViewError(ValueError):
@@ -23,15 +25,52 @@ class ViewError(ValueError):
         self.field = field_name
 
 
-def _finite(name: str, value: float | None, *, positive: bool = False) -> None:
+#: Focal lengths (fx, fy) must be below this many pixels. The longest real ones are ~1e5-1e6
+#: (a 2000 mm lens on 2 um pixels is 1e6); the bound keeps ``f**2`` and ``f / sin(theta)``
+#: far from floating-point limits.
+MAX_FOCAL_PX = 1e7
+#: Image width and height: whole numbers of pixels, at most this many each.
+MAX_SIDE_PX = 1_000_000
+#: The principal point may lie outside the image (a crop), but within this many pixels of 0.
+MAX_PRINCIPAL_POINT_PX = 1e7
+#: ``distance`` (``Zc``, in the user's unit) must lie strictly between these. Twelve orders of
+#: magnitude either way of any unit (nanometres to terametres, in metres): no wall needs more,
+#: and ``Zc``, ``1/Zc`` and their products with focal lengths and scales stay finite.
+DISTANCE_RANGE = (1e-12, 1e12)
+#: The vanishing line (the horizon of the wall) must pass at least this many pixels from the
+#: principal point: ``a = f cos(theta) / sin(theta) >= 0.5`` (Eq. 4.16). Closer, the pixel at
+#: the principal point sees the horizon, so the point where the optical axis meets the wall
+#: (which anchors the output frame, Fig. 5.7) is beyond what the camera resolves, and the
+#: pixel homography, normalized at the principal point, divides by ``w ~ a`` that rounding
+#: errors of size ``1e-16 (|cx| + |cy|)`` swamp (pan = tilt = 89.9999999 at f = 300 has
+#: ``a = 9e-16`` px). Non-frontal views only.
+MIN_HORIZON_OFFSET_PX = 0.5
+
+
+def _as_number(name: str, value: object) -> float | int | None:
+    """``value`` as a finite Python number (numpy scalars and big integers too), else ViewError."""
     if value is None:
-        return
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise ViewError(name, f"{name} must be a number, got {value!r}")
-    if not math.isfinite(value):
-        raise ViewError(name, f"{name} must be a finite number, got {value}")
-    if positive and value <= 0:
-        raise ViewError(name, f"{name} must be positive, got {value:g}")
+        return None
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise ViewError(name, f"{name} must be a number, got {quote(value)}")
+    if type(value) not in (int, float):  # numpy scalars, Fractions: plain Python numbers
+        value = int(value) if isinstance(value, numbers.Integral) else float(value)
+    try:
+        finite = math.isfinite(value)
+    except OverflowError:  # an int too large for a float
+        finite = False
+    if not finite:
+        raise ViewError(name, f"{name} must be a finite number, got {quote(value)}")
+    return value
+
+
+def _check_range(name: str, value: float, low: float, high: float, unit: str) -> None:
+    """``low < value < high``; ``low`` 0 reads "positive"."""
+    if value <= low:
+        what = "positive" if low == 0 else f"above {low:g}{unit}"
+        raise ViewError(name, f"{name} must be {what}, got {value:.15g}")
+    if value >= high:
+        raise ViewError(name, f"{name} must be below {high:g}{unit}, got {value:.15g}")
 
 
 @dataclass(frozen=True)
@@ -40,11 +79,18 @@ class View:
 
     Convention
     ----------
-    - ``pan``, ``tilt``: degrees, ``pan > 0`` turns left, ``tilt > 0`` tilts up (spec section 1).
-    - ``focal``: focal length in pixels.
-    - ``cx``, ``cy``: principal point in pixels; default ``((width-1)/2, (height-1)/2)``.
-    - ``width``, ``height``: image size in pixels, when known.
-    - ``distance``: ``Zc``, camera to wall along the wall's normal, in the user's unit.
+    - ``pan``, ``tilt``: degrees, ``pan > 0`` turns left, ``tilt > 0`` tilts up (spec section 1);
+      strictly between -90 and 90, and the horizon at least :data:`MIN_HORIZON_OFFSET_PX`
+      from the principal point.
+    - ``focal``: focal length in pixels, ``0 < focal <`` :data:`MAX_FOCAL_PX`.
+    - ``cx``, ``cy``: principal point in pixels; default ``((width-1)/2, (height-1)/2)``;
+      ``|cx|, |cy| <`` :data:`MAX_PRINCIPAL_POINT_PX`.
+    - ``width``, ``height``: image size in pixels, when known; whole, 1 to :data:`MAX_SIDE_PX`.
+    - ``distance``: ``Zc``, camera to wall along the wall's normal, in the user's unit, within
+      :data:`DISTANCE_RANGE`.
+
+    Any real number is accepted (numpy scalars included) and stored as a Python number;
+    anything else, or a value out of range, raises :class:`ViewError` naming the field.
     """
 
     pan: float
@@ -58,16 +104,33 @@ class View:
     parameters: GsrwtParameters = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
-        for name in ("pan", "tilt", "cx", "cy"):
-            _finite(name, getattr(self, name))
-        for name in ("focal", "width", "height", "distance"):
-            _finite(name, getattr(self, name), positive=True)
+        for name in ("pan", "tilt", "focal", "cx", "cy", "width", "height", "distance"):
+            object.__setattr__(self, name, _as_number(name, getattr(self, name)))
+        for name in ("pan", "tilt", "focal"):
+            if getattr(self, name) is None:
+                raise ViewError(name, f"{name} is required")
+        _check_range("focal", self.focal, 0, MAX_FOCAL_PX, " pixels")
+        for name in ("cx", "cy"):
+            value = getattr(self, name)
+            if value is not None and abs(value) >= MAX_PRINCIPAL_POINT_PX:
+                raise ViewError(
+                    name, f"{name} must be within {MAX_PRINCIPAL_POINT_PX:g} pixels of 0, "
+                    f"got {value:.15g}"
+                )
         for name in ("width", "height"):
             value = getattr(self, name)
-            if value is not None and value != int(value):
-                raise ViewError(name, f"{name} must be a whole number of pixels, got {value:g}")
-            if value is not None:
-                object.__setattr__(self, name, int(value))
+            if value is None:
+                continue
+            _check_range(name, value, 0, math.inf, "")
+            if value > MAX_SIDE_PX:
+                raise ViewError(
+                    name, f"{name} must be at most {MAX_SIDE_PX} pixels, got {value:.15g}"
+                )
+            if value != int(value):
+                raise ViewError(name, f"{name} must be a whole number of pixels, got {value:.15g}")
+            object.__setattr__(self, name, int(value))
+        if self.distance is not None:
+            _check_range("distance", self.distance, *DISTANCE_RANGE, "")
         if (self.cx is None) != (self.cy is None):
             missing = "cy" if self.cy is None else "cx"
             raise ViewError(missing, "cx and cy must be given together")
@@ -82,9 +145,17 @@ class View:
                     f"{name} must be strictly between -90 and 90 degrees (the camera cannot see "
                     f"the wall otherwise), got {value:g}",
                 )
-        object.__setattr__(
-            self, "parameters", gsrwt_parameters(self.pan, self.tilt, self.focal)
-        )
+        parameters = gsrwt_parameters(self.pan, self.tilt, self.focal)
+        if not parameters.is_frontal and parameters.shift < MIN_HORIZON_OFFSET_PX:
+            name = "pan" if abs(self.pan) >= abs(self.tilt) else "tilt"
+            raise ViewError(
+                name,
+                f"pan {self.pan!r} and tilt {self.tilt!r} with focal {self.focal:g} put the "
+                f"horizon {parameters.shift:.2g} pixels from the principal point, less than "
+                f"{MIN_HORIZON_OFFSET_PX:g} (the optical axis meets the wall beyond what the "
+                "camera resolves)",
+            )
+        object.__setattr__(self, "parameters", parameters)
 
     def with_size(self, width: int, height: int) -> View:
         """The same view with a known image size (the principal point defaults to its centre)."""

@@ -16,7 +16,10 @@ when its view is built, as :class:`RecordError` naming the file, the row and the
 from __future__ import annotations
 
 import csv
+import io
 import math
+import numbers
+import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path, PurePosixPath
@@ -25,7 +28,9 @@ from typing import Any
 import yaml
 
 from .camera import View, ViewError
-from .geometry import gsrwt_parameters, pan_tilt_from_gsrwt
+from .geometry import pan_tilt_from_gsrwt
+from .messages import escape_controls, one_line, quote
+from .safe_yaml import YamlInputError, load_yaml
 
 VIEW_FIELDS = ("pan", "tilt", "focal", "cx", "cy", "width", "height", "distance")
 GSRWT_FIELDS = ("delta", "a", "gamma")
@@ -88,15 +93,34 @@ def merge_values(own: Mapping[str, Any], *fallbacks: Mapping[str, Any]) -> dict[
     return merged
 
 
+_DECIMAL = re.compile(r"[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
+_NOT_FINITE = re.compile(r"[+-]?(?:inf|infinity|nan)", re.IGNORECASE)
+
+
 def _number(where: str, name: str, raw: Any) -> float:
-    if isinstance(raw, bool):
-        raise RecordError(where, name, f"not a number: {raw!r}")
-    try:
-        value = float(raw)
-    except (TypeError, ValueError):
-        raise RecordError(where, name, f"not a number: {raw!r}") from None
+    """A raw value as a finite float: a real number (numpy's too) or a decimal string.
+
+    Strings must be plain ASCII decimals (``-12``, ``3.5``, ``1e-3``); ``nan``, ``inf`` and
+    values beyond floating point (``1e400``, an integer of 400 digits) are errors.
+    """
+    if isinstance(raw, str):
+        text = raw.strip()
+        if _NOT_FINITE.fullmatch(text):
+            raise RecordError(where, name, f"must be finite, got {quote(raw)}")
+        if not _DECIMAL.fullmatch(text):
+            raise RecordError(where, name, f"not a number: {quote(raw)}")
+        value = float(text)
+    elif isinstance(raw, bool) or not isinstance(raw, numbers.Real):
+        raise RecordError(where, name, f"not a number: {quote(raw)}")
+    else:
+        try:
+            value = float(raw)
+        except OverflowError:
+            value = math.inf
+        if math.isnan(value) or (math.isinf(value) and not isinstance(raw, numbers.Integral)):
+            raise RecordError(where, name, f"must be finite, got {quote(raw)}")
     if not math.isfinite(value):
-        raise RecordError(where, name, f"must be finite, got {raw!r}")
+        raise RecordError(where, name, f"out of range, got {quote(raw)}")
     return value
 
 
@@ -105,42 +129,45 @@ def view_from_values(values: Mapping[str, Any], where: str) -> View:
 
     When ``delta`` and ``a`` are given instead of pan and tilt, the pose comes from the GS-RWT
     parameters (:func:`~gsrwt_cli.geometry.pan_tilt_from_gsrwt`); a given ``gamma`` must
-    agree with them within :data:`GAMMA_TOLERANCE_DEG`.
+    agree with them within :data:`GAMMA_TOLERANCE_DEG`. Raises only :class:`RecordError`.
     """
-    numbers = {
+    numbers_given = {
         name: _number(where, name, values[name])
         for name in NUMERIC_FIELDS
         if values.get(name) is not None and values.get(name) != ""
     }
-    given = set(numbers)
+    given = set(numbers_given)
     if given & {"pan", "tilt"} and given & {"delta", "a"}:
         raise RecordError(where, None, "give pan and tilt, or delta and a, not both")
     if given & {"delta", "a"}:
         for name in ("delta", "a", "focal"):
-            if name not in numbers:
+            if name not in numbers_given:
                 reason = f"missing field '{name}' (needed with delta, a, gamma)"
                 raise RecordError(where, None, reason)
         try:
-            pan, tilt = pan_tilt_from_gsrwt(numbers["delta"], numbers["a"], numbers["focal"])
+            pan, tilt = pan_tilt_from_gsrwt(
+                numbers_given["delta"], numbers_given["a"], numbers_given["focal"]
+            )
         except ValueError as error:
             raise RecordError(where, str(error).split(" ", 1)[0], str(error)) from None
-        numbers["pan"], numbers["tilt"] = pan, tilt
-        if "gamma" in numbers:
-            implied = gsrwt_parameters(pan, tilt, numbers["focal"]).gamma_deg
-            if abs(numbers["gamma"] - implied) > GAMMA_TOLERANCE_DEG:
-                raise RecordError(
-                    where,
-                    "gamma",
-                    f"{numbers['gamma']:g} disagrees with delta and a, which imply "
-                    f"gamma = {implied:.2f}",
-                )
+        numbers_given["pan"], numbers_given["tilt"] = pan, tilt
     for name in ("pan", "tilt", "focal"):
-        if name not in numbers:
+        if name not in numbers_given:
             raise RecordError(where, None, f"missing field '{name}'")
     try:
-        return View(**{name: numbers[name] for name in VIEW_FIELDS if name in numbers})
+        view = View(**{name: numbers_given[name] for name in VIEW_FIELDS if name in numbers_given})
     except ViewError as error:
         raise RecordError(where, error.field, str(error)) from None
+    if "gamma" in numbers_given:
+        implied = view.parameters.gamma_deg
+        if abs(numbers_given["gamma"] - implied) > GAMMA_TOLERANCE_DEG:
+            raise RecordError(
+                where,
+                "gamma",
+                f"{numbers_given['gamma']:g} disagrees with delta and a, which imply "
+                f"gamma = {implied:.2f}",
+            )
+    return view
 
 
 @dataclass
@@ -167,12 +194,18 @@ class Sidecar:
             return self._by_path[key]
         candidates = self._by_name.get(PurePosixPath(key).name, [])
         if len(candidates) > 1:
-            rows = ", ".join(record.image for record in candidates)
+            rows = ", ".join(_unquoted(record.image) for record in candidates[:3])
+            more = f" and {len(candidates) - 3} more" if len(candidates) > 3 else ""
             raise SidecarError(
-                f"{self.path}: {PurePosixPath(key).name} matches several rows by file name "
-                f"({rows}); give the image's relative path"
+                f"{display_path(self.path)}: {_unquoted(PurePosixPath(key).name)} matches "
+                f"several rows by file name ({rows}{more}); give the image's relative path"
             )
         return candidates[0] if candidates else None
+
+
+def _unquoted(text: str) -> str:
+    """``text`` bounded and escaped like :func:`~gsrwt_cli.messages.quote`, without the quotes."""
+    return quote(text)[1:-1]
 
 
 def _normalize(image: str) -> str:
@@ -182,106 +215,182 @@ def _normalize(image: str) -> str:
     return text
 
 
+def display_path(path: str | Path) -> str:
+    """A path as messages show it: on one line (control characters escaped)."""
+    return escape_controls(str(path))
+
+
+def _check_is_file(path: Path) -> None:
+    if not path.exists():
+        raise SidecarError(f"{display_path(path)}: no such file")
+    if path.is_dir():
+        raise SidecarError(f"{display_path(path)}: is a directory, not a sidecar file")
+
+
+def read_sidecar_text(path: Path) -> str:
+    """The text of a sidecar file (UTF-8, an optional BOM removed); SidecarError if unreadable."""
+    name = display_path(path)
+    _check_is_file(path)
+    try:
+        return path.read_text(encoding="utf-8-sig")
+    except UnicodeDecodeError as error:
+        raise SidecarError(f"{name}: not UTF-8 text ({error.reason})") from None
+    except OSError as error:
+        raise SidecarError(f"{name}: cannot read ({error.strerror})") from None
+
+
 def load_sidecar(path: str | Path) -> Sidecar:
     """Read a CSV, TSV or YAML sidecar; raises :class:`SidecarError` naming the file."""
     path = Path(path)
-    if not path.exists():
-        raise SidecarError(f"{path}: no such file")
-    if path.is_dir():
-        raise SidecarError(f"{path}: is a directory, not a sidecar file")
-    try:
-        text = path.read_text(encoding="utf-8-sig")
-    except UnicodeDecodeError as error:
-        raise SidecarError(f"{path}: not UTF-8 text ({error.reason})") from None
-    except OSError as error:
-        raise SidecarError(f"{path}: cannot read ({error.strerror})") from None
     suffix = path.suffix.lower()
+    if suffix not in (".yaml", ".yml", ".csv", ".tsv", ".txt"):
+        _check_is_file(path)  # a missing file is reported as such first
+        raise SidecarError(
+            f"{display_path(path)}: unknown sidecar type {quote(suffix)} "
+            "(use .csv, .tsv or .yaml)"
+        )
+    text = read_sidecar_text(path)
     if suffix in (".yaml", ".yml"):
-        records = _yaml_records(path, text)
-    elif suffix in (".csv", ".tsv", ".txt"):
-        records = _csv_records(path, text, delimiter="\t" if suffix == ".tsv" else ",")
-    else:
-        raise SidecarError(f"{path}: unknown sidecar type '{suffix}' (use .csv, .tsv or .yaml)")
+        return sidecar_from_yaml(path, parse_yaml(path, text))
+    return _checked_sidecar(
+        path, _csv_records(path, text, delimiter="\t" if suffix == ".tsv" else ",")
+    )
+
+
+def _checked_sidecar(path: Path, records: list[Record]) -> Sidecar:
+    """The sidecar of ``records``; an image given twice is an error naming both places."""
     seen: dict[str, str] = {}
     for record in records:
         key = _normalize(record.image)
         if key in seen:
-            raise SidecarError(f"{record.where}: image '{record.image}' is already in {seen[key]}")
+            raise SidecarError(
+                f"{record.where}: image {quote(record.image)} is already in {seen[key]}"
+            )
         seen[key] = record.where
     return Sidecar(path, records)
 
 
 def _csv_records(path: Path, text: str, delimiter: str) -> list[Record]:
-    reader = csv.reader(text.splitlines(), delimiter=delimiter)
-    header = next(reader, None)
-    if header is None or not any(cell.strip() for cell in header):
-        raise SidecarError(f"{path}: empty file, expected a header row starting with 'image'")
-    columns = [cell.strip().lower() for cell in header]
-    if "image" not in columns:
+    """Records of a CSV/TSV text; ``line N`` is where the row starts, quoted newlines counted."""
+    name = display_path(path)
+    reader = csv.reader(io.StringIO(text, newline=""), delimiter=delimiter)
+    try:
+        header = next(reader, None)
+        if header is None or not any(cell.strip() for cell in header):
+            raise SidecarError(f"{name}: empty file, expected a header row starting with 'image'")
+        columns = [cell.strip().lower() for cell in header]
+        if "image" not in columns:
+            raise SidecarError(
+                f"{name} line 1: missing column 'image' (header is {quote(','.join(columns))})"
+            )
+        first_seen: dict[str, int] = {}
+        for number, column in enumerate(columns, start=1):
+            if column and column in first_seen:
+                raise SidecarError(
+                    f"{name} line 1: column {quote(column)} given twice "
+                    f"(columns {first_seen[column]} and {number})"
+                )
+            first_seen.setdefault(column, number)
+        records = []
+        row_start = reader.line_num + 1
+        for cells in reader:
+            line_number, row_start = row_start, reader.line_num + 1
+            if not any(cell.strip() for cell in cells):
+                continue
+            where = f"{name} line {line_number}"
+            if len(cells) > len(columns):
+                raise SidecarError(
+                    f"{where}: {len(cells)} cells but the header has {len(columns)}"
+                )
+            row = {c: v.strip() for c, v in zip(columns, cells) if v.strip() != ""}
+            image = row.pop("image", "")
+            if not image:
+                raise SidecarError(f"{where}, field 'image': empty")
+            values = {k: v for k, v in row.items() if k in NUMERIC_FIELDS}
+            records.append(Record(image=image, values=values, where=where))
+    except csv.Error as error:
         raise SidecarError(
-            f"{path} line 1: missing column 'image' (header is {','.join(columns)})"
-        )
-    records = []
-    for line_number, cells in enumerate(reader, start=2):
-        if not any(cell.strip() for cell in cells):
-            continue
-        where = f"{path} line {line_number}"
-        if len(cells) > len(columns):
-            raise SidecarError(f"{where}: {len(cells)} cells but the header has {len(columns)}")
-        row = {c: v.strip() for c, v in zip(columns, cells) if v.strip() != ""}
-        image = row.pop("image", "")
-        if not image:
-            raise SidecarError(f"{where}, field 'image': empty")
-        values = {k: v for k, v in row.items() if k in NUMERIC_FIELDS}
-        records.append(Record(image=image, values=values, where=where))
+            f"{name} line {reader.line_num}: {one_line(str(error), 200)}"
+        ) from None
     return records
 
 
-def _yaml_records(path: Path, text: str) -> list[Record]:
+def parse_yaml(path: Path, text: str) -> Any:
+    """The YAML document of a sidecar, read by the bounded loader (:mod:`.safe_yaml`).
+
+    Raises :class:`SidecarError` naming the file and, when known, the line.
+    """
     try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as error:
-        mark = getattr(error, "problem_mark", None)
-        at = f" line {mark.line + 1}" if mark is not None else ""
-        problem = getattr(error, "problem", None) or "invalid YAML"
-        raise SidecarError(f"{path}{at}: {problem}") from None
+        return load_yaml(text)
+    except YamlInputError as error:
+        at = f" line {error.line}" if error.line is not None else ""
+        raise SidecarError(f"{display_path(path)}{at}: {error.problem}") from None
+
+
+def load_yaml_file(path: Path) -> Any:
+    """Read and parse a YAML file (a sidecar, or the parameters beside one image)."""
+    return parse_yaml(path, read_sidecar_text(path))
+
+
+def sidecar_from_yaml(path: Path, data: Any) -> Sidecar:
+    """The sidecar of a parsed YAML document: a list of records or a mapping image -> record."""
+    return _checked_sidecar(path, _yaml_records(path, data))
+
+
+def _yaml_records(path: Path, data: Any) -> list[Record]:
+    name = display_path(path)
     if data is None:
-        raise SidecarError(f"{path}: empty file")
+        raise SidecarError(f"{name}: empty file")
     defaults: dict[str, Any] = {}
+    defaults_where: str | None = None
     items: list[tuple[str, Any, Any]] = []  # (where, image name or None, record)
     if isinstance(data, list):
         for index, item in enumerate(data, start=1):
             if isinstance(item, dict) and set(item) == {"defaults"}:
-                where = f"{path} record {index} (defaults)"
-                defaults = _yaml_mapping(path, where, item["defaults"])
+                where = f"{name} record {index} (defaults)"
+                if defaults_where is not None:
+                    raise SidecarError(f"{where}: defaults given twice (first in {defaults_where})")
+                defaults, defaults_where = fields_of(where, item["defaults"]), where
                 continue
-            items.append((f"{path} record {index}", None, item))
+            items.append((f"{name} record {index}", None, item))
     elif isinstance(data, dict):
         for key, item in data.items():
             if key == "defaults":
-                defaults = _yaml_mapping(path, f"{path} defaults", item)
+                defaults = fields_of(f"{name} defaults", item)
                 continue
-            items.append((f"{path} record '{key}'", str(key), item))
+            items.append((f"{name} record {quote(str(key))}", str(key), item))
     else:
-        raise SidecarError(f"{path}: expected a list of records or a mapping of image to record")
-    for name in defaults:
-        if name not in NUMERIC_FIELDS:
-            raise SidecarError(f"{path} defaults: unknown field '{name}'")
+        raise SidecarError(f"{name}: expected a list of records or a mapping of image to record")
+    for field_name in defaults:
+        if field_name not in NUMERIC_FIELDS:
+            raise SidecarError(f"{name} defaults: unknown field {quote(field_name)}")
     records = []
     for where, key, item in items:
-        mapping = _yaml_mapping(path, where, item)
+        mapping = fields_of(where, item)
         image = key if key is not None else mapping.get("image")
         if image is None or str(image).strip() == "":
             raise SidecarError(f"{where}, field 'image': missing")
+        if isinstance(image, bool) or not isinstance(image, (str, int, float)):
+            raise SidecarError(f"{where}, field 'image': expected a file name, got {quote(image)}")
         values = {k: v for k, v in mapping.items() if k in NUMERIC_FIELDS and v is not None}
         records.append(Record(image=str(image), values=values, where=where, defaults=defaults))
     return records
 
 
-def _yaml_mapping(path: Path, where: str, item: Any) -> dict[str, Any]:
+def fields_of(where: str, item: Any) -> dict[str, Any]:
+    """A YAML record as ``{field: value}`` with field names stripped and lower-cased.
+
+    Not a mapping, or two keys that name the same field (``Pan`` and ``pan``), is an error.
+    """
     if not isinstance(item, dict):
-        raise SidecarError(f"{where}: expected a mapping of field to value, got {item!r}")
-    return {str(k).strip().lower(): v for k, v in item.items()}
+        raise SidecarError(f"{where}: expected a mapping of field to value, got {quote(item)}")
+    fields: dict[str, Any] = {}
+    for key, value in item.items():
+        field_name = str(key).strip().lower()
+        if field_name in fields:
+            raise SidecarError(f"{where}: field {quote(field_name)} given twice")
+        fields[field_name] = value
+    return fields
 
 
 def format_sidecar(path: str | Path, rows: list[Mapping[str, Any]]) -> str:
