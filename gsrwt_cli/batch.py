@@ -15,7 +15,6 @@ from pathlib import Path, PurePosixPath
 from typing import Any
 
 import cv2
-import yaml
 
 from .camera import View
 from .imaging import (
@@ -26,17 +25,10 @@ from .imaging import (
     encode_image,
 )
 from .outputs import write_atomic
+from .parameters import Found, NotFound, Problem, resolve_parameters
 from .rectify import plan_image
 from .report import PARAMS_COLUMNS, params_row
-from .sidecar import (
-    NUMERIC_FIELDS,
-    RecordError,
-    Sidecar,
-    SidecarError,
-    load_sidecar,
-    merge_values,
-    view_from_values,
-)
+from .sidecar import RecordError, Sidecar, view_from_values
 
 RECTIFY_COLUMNS = (
     *PARAMS_COLUMNS,
@@ -120,62 +112,6 @@ class Settings:
     threads_per_worker: int = 0  # 0: OpenCV's default
 
 
-def adjacent_yaml(image: Path) -> Path | None:
-    """``NAME.yaml`` or ``NAME.EXT.yaml`` (or ``.yml``) beside the image, if present."""
-    for candidate in (
-        image.with_suffix(".yaml"),
-        image.with_name(image.name + ".yaml"),
-        image.with_suffix(".yml"),
-        image.with_name(image.name + ".yml"),
-    ):
-        if candidate.is_file():
-            return candidate
-    return None
-
-
-def parameters_for(
-    source: Source, sidecar: Sidecar | None, fallback: dict[str, Any]
-) -> tuple[dict[str, Any] | None, str, str | None]:
-    """(values, where, error) for an image: sidecar row, then adjacent YAML, then options.
-
-    The first source that has the image wins; fields it leaves out come from its defaults
-    and then from the command-line options.
-    """
-    if sidecar is not None:
-        try:
-            record = sidecar.find(source.relative.as_posix())
-        except SidecarError as error:
-            return None, str(sidecar.path), str(error)
-        if record is not None:
-            return record.merged(fallback), record.where, None
-    beside = adjacent_yaml(source.path)
-    if beside is not None:
-        try:
-            data = yaml.safe_load(beside.read_text(encoding="utf-8"))
-        except (OSError, UnicodeDecodeError, yaml.YAMLError) as error:
-            return None, str(beside), f"{beside}: cannot read parameters ({error})"
-        if not isinstance(data, dict):
-            return None, str(beside), f"{beside}: expected a mapping of field to value"
-        values = {str(k).strip().lower(): v for k, v in data.items() if v is not None}
-        if set(values) & set(NUMERIC_FIELDS):  # one record: this image's parameters
-            return merge_values(values, fallback), str(beside), None
-        try:  # a sidecar mapping (as gsrwt render writes): look the image up in it
-            record = load_sidecar(beside).find(source.path.name)
-        except SidecarError as error:
-            return None, str(beside), str(error)
-        if record is None:
-            return None, str(beside), f"{beside}: no record for {source.path.name}"
-        return record.merged(fallback), record.where, None
-    if {"pan", "tilt", "focal"} <= set(fallback):
-        return dict(fallback), "options", None
-    places = []
-    if sidecar is not None:
-        places.append(f"not in {sidecar.path}")
-    places.append(f"no {source.path.stem}.yaml beside it")
-    places.append("no --pan/--tilt/--focal")
-    return None, "", "no parameters: " + ", ".join(places)
-
-
 def plan_jobs(
     sources: Iterable[Source],
     outdir: Path,
@@ -191,7 +127,13 @@ def plan_jobs(
         if extension is not None:
             relative = relative.with_suffix(extension)
         output = outdir / relative
-        values, where, error = parameters_for(source, sidecar, fallback)
+        match resolve_parameters(source.path, source.relative, sidecar, fallback):
+            case Found(values=values, where=where):
+                error = None
+            case Problem(message=error, where=where):
+                values = None
+            case NotFound() as missing:
+                values, where, error = None, "", missing.message
         if output in claimed:
             error = f"its output {output} is also the output of {claimed[output]}"
         claimed.setdefault(output, source.path)

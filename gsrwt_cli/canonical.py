@@ -14,11 +14,11 @@ from typing import Any
 
 import numpy as np
 
-from .batch import Source, parameters_for
 from .geometry import Matrix, map_points
 from .imaging import ImageError, read_image
+from .parameters import NotFound, Problem, resolve_parameters
 from .rectify import rectify_image
-from .sidecar import RecordError, Sidecar, view_from_values
+from .sidecar import RecordError, Sidecar
 
 
 @dataclass(frozen=True)
@@ -41,22 +41,20 @@ def canonical_views(
 ) -> Iterator[CanonicalView | tuple[Path, str]]:
     """Each image's canonical view, or ``(path, reason)`` when it cannot be read or rectified."""
     for path in paths:
-        values, where, problem = parameters_for(
-            Source(path, PurePosixPath(path.name)), sidecar, fallback
-        )
+        found = resolve_parameters(path, PurePosixPath(path.name), sidecar, fallback)
         try:
             image = read_image(path)
         except ImageError as error:
             yield path, str(error)
             continue
-        if problem is not None and problem.startswith("no parameters"):
+        if isinstance(found, NotFound):
             yield CanonicalView(path, image, None)
             continue
-        if problem is not None:
-            yield path, problem
+        if isinstance(found, Problem):
+            yield path, found.message
             continue
         try:
-            view = view_from_values(values or {}, where)
+            view = found.view()
             frontal, info = rectify_image(image, view)
         except (RecordError, ValueError) as error:
             yield path, str(error)
