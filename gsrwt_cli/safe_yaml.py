@@ -103,6 +103,8 @@ def load_yaml(text: str) -> Any:
         problem = error.problem or error.context or "invalid YAML"
         if error.context and problem.startswith("but "):  # "expected ... but found ..."
             problem = f"{error.context} {problem}"
+        elif problem == "second occurrence" and error.context_mark is not None:
+            problem = f"{error.context} on line {error.context_mark.line + 1}, again here"
         raise YamlInputError(
             mark.line + 1 if mark is not None else None, one_line(problem, PROBLEM_LIMIT)
         ) from None
