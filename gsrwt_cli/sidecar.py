@@ -11,6 +11,14 @@ Formats (angles in degrees, lengths in pixels, ``distance`` in the user's wall u
 
 Problems with the file itself raise :class:`SidecarError`; problems with one record surface
 when its view is built, as :class:`RecordError` naming the file, the row and the field.
+
+Refused (one-line messages, values quoted by :func:`~gsrwt_cli.messages.quote`): for the
+file, a CSV column given twice, a cell the csv module refuses, an image given twice, and YAML
+that :mod:`.safe_yaml` refuses (deep nesting, alias bombs, duplicate keys, huge integers);
+for a record, a value that is not a real number or a plain ASCII decimal (``nan``, ``1e400``,
+a 400-digit integer, ``1_000`` are errors) or that breaks the bounds of
+:class:`~gsrwt_cli.camera.View`. CSV ``line N`` is where the row starts, quoted newlines
+counted. (Over 400 lines: reading, validating and writing both formats belong together.)
 """
 
 from __future__ import annotations
