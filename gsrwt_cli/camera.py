@@ -53,14 +53,15 @@ def _as_number(name: str, value: object) -> float | int | None:
         return None
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise ViewError(name, f"{name} must be a number, got {quote(value)}")
-    if type(value) not in (int, float):  # numpy scalars, Fractions: plain Python numbers
-        value = int(value) if isinstance(value, numbers.Integral) else float(value)
+    given = value
     try:
+        if type(value) not in (int, float):  # numpy scalars, Fractions: plain Python numbers
+            value = int(value) if isinstance(value, numbers.Integral) else float(value)
         finite = math.isfinite(value)
-    except OverflowError:  # an int too large for a float
+    except OverflowError:  # an int or a Fraction too large for a float
         finite = False
     if not finite:
-        raise ViewError(name, f"{name} must be a finite number, got {quote(value)}")
+        raise ViewError(name, f"{name} must be a finite number, got {quote(given)}")
     return value
 
 

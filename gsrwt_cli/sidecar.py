@@ -123,11 +123,11 @@ def _number(where: str, name: str, raw: Any) -> float:
     else:
         try:
             value = float(raw)
-        except OverflowError:
-            value = math.inf
-        if math.isnan(value) or (math.isinf(value) and not isinstance(raw, numbers.Integral)):
+        except OverflowError:  # an integer or a fraction beyond floating point
+            raise RecordError(where, name, f"out of range, got {quote(raw)}") from None
+        if not math.isfinite(value):
             raise RecordError(where, name, f"must be finite, got {quote(raw)}")
-    if not math.isfinite(value):
+    if not math.isfinite(value):  # a decimal string beyond floating point
         raise RecordError(where, name, f"out of range, got {quote(raw)}")
     return value
 

@@ -16,6 +16,7 @@ import math
 import re
 import time
 import warnings
+from fractions import Fraction
 from pathlib import Path
 
 import numpy as np
@@ -171,6 +172,8 @@ def test_numpy_scalars_are_numbers_and_stored_as_python_numbers():
         ({"tilt": float("nan")}, "tilt", "finite"),
         ({"distance": 1e307}, "distance", "below 1e+12"),
         ({"cx": 1e7, "cy": 0.0}, "cx", "within 1e+07 pixels"),
+        ({"focal": Fraction(10**400)}, "focal", "must be a finite number, got 'Fraction("),
+        ({"height": np.float32("inf"), "width": 10}, "height", "must be a finite number"),
     ],
 )
 def test_view_refuses_values_out_of_range_with_view_errors(kwargs, field, words):
@@ -179,6 +182,12 @@ def test_view_refuses_values_out_of_range_with_view_errors(kwargs, field, words)
     assert caught.value.field == field
     assert words in str(caught.value)
     assert_one_bounded_line(str(caught.value))
+
+
+def test_numbers_beyond_floating_point_in_values_are_record_errors():
+    for raw in (10**400, Fraction(10**400), np.float64("inf")):
+        with pytest.raises(RecordError, match="r 1, field 'focal': (out of range|must be fin)"):
+            view_from_values({"pan": 1, "tilt": 2, "focal": raw}, "r 1")
 
 
 def test_pose_with_the_horizon_through_the_principal_pixel_is_refused():
