@@ -55,22 +55,15 @@ def relative_output(name: str) -> PurePosixPath:
     return PurePosixPath(*parts)
 
 
-def _existing_ancestor(path: Path) -> Path:
-    while not os.path.lexists(path) and path != path.parent:
-        path = path.parent
-    return path
-
-
 def check_inside(root: str | Path, target: str | Path) -> None:
     """Raise :class:`OutsideOutputError` unless ``target``'s directory lies inside ``root``.
 
-    The nearest existing ancestor of ``target``'s directory is resolved (symbolic links
-    followed) and must be ``root``'s real path or below it. The target itself may be a
+    ``target``'s directory is resolved (symbolic links followed, as far as it exists) and
+    must be ``root``'s real path or below it. The target itself may be a
     symbolic link: :func:`open_atomic` replaces the link, never what it points to.
     """
-    real_root = os.path.realpath(root)
-    parent = Path(os.path.abspath(target)).parent
-    real_parent = os.path.realpath(_existing_ancestor(parent))
+    real_root = os.path.realpath(root)  # the parts that do not exist yet are taken as given
+    real_parent = os.path.realpath(Path(os.path.abspath(target)).parent)
     if real_parent != real_root and not real_parent.startswith(real_root.rstrip(os.sep) + os.sep):
         raise OutsideOutputError(
             f"would be written outside the output {root} (through a symbolic link to "

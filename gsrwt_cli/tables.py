@@ -125,3 +125,23 @@ def write_table(
     writer = TableWriter(stream, columns, fmt)
     writer.write_rows(rows)
     writer.close()
+
+
+def read_table(stream: IO[str], fmt: str) -> list[dict[str, Any]]:
+    """The rows of a table this module wrote in a machine format (csv, tsv, json, jsonl).
+
+    Text formats give every value as a string (empty cells as ``None``), which
+    :class:`TableWriter` writes back unchanged. Raises ``ValueError`` for anything else.
+    """
+    if fmt in ("csv", "tsv"):
+        reader = csv.DictReader(stream, dialect="excel-tab" if fmt == "tsv" else "excel")
+        return [{k: (v if v != "" else None) for k, v in row.items()} for row in reader]
+    if fmt == "json":
+        rows = json.load(stream)
+    elif fmt == "jsonl":
+        rows = [json.loads(line) for line in stream if line.strip()]
+    else:
+        raise ValueError(f"cannot read back a {fmt} table")
+    if not isinstance(rows, list) or not all(isinstance(row, dict) for row in rows):
+        raise ValueError("not a table of rows")
+    return rows
