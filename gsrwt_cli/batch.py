@@ -28,10 +28,10 @@ from .imaging import (
     IMAGE_EXTENSIONS,
     ImageError,
     Scratch,
-    check_input_size,
     check_writable,
     encode_image,
     image_file_size,
+    measure_image_file,
 )
 from .messages import one_line
 from .outputs import OutsideOutputError, check_inside, remove_stale_temporaries, write_atomic
@@ -304,9 +304,10 @@ def process_job(job: Job, settings: Settings, scratch: Scratch | None = None) ->
                 return record_row(job, settings)
             if not job.source.is_file():
                 raise _JobError("no such file" if not job.source.exists() else "not a file")
+            width, height = measure_image_file(job.source, settings.max_input_pixels)
+            info = _plan(view, width, height, settings)  # refuses big outputs undecoded
             shape, dtype = scratch.read(job.source, settings.max_input_pixels)
             channels = 1 if len(shape) == 2 else shape[2]
-            info = _plan(view, shape[1], shape[0], settings)
             check_writable(
                 job.output.suffix, dtype,
                 4 if settings.alpha and channels in (1, 3) else channels, info.size,
@@ -336,7 +337,7 @@ def record_row(job: Job, settings: Settings, status: str = "skipped") -> dict[st
         with np.errstate(all="ignore"):
             view = _view(job)
             row.update(params_row(view, str(job.source)))
-            size = check_input_size(image_file_size(job.source), settings.max_input_pixels)
+            size = measure_image_file(job.source, settings.max_input_pixels)
             info = _plan(view, size[0], size[1], settings)
         row.update(_geometry(info), image=str(job.source), status=status)
         existing = image_file_size(job.output)

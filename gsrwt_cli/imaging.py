@@ -142,6 +142,22 @@ def image_file_size(path: str | Path) -> tuple[int, int] | None:
         return None
 
 
+def measure_image_file(path: str | Path, max_pixels: float) -> tuple[int, int]:
+    """``(width, height)`` of an image file from its header, refused as :func:`decode_image`
+    would refuse it (empty, unreadable, unmeasurable, above ``max_pixels``), undecoded."""
+    try:
+        with open(path, "rb") as handle:
+            if not handle.read(1):
+                raise ImageError("empty file")
+            handle.seek(0)
+            size = header_size(handle)
+    except IsADirectoryError:
+        raise ImageError("is a directory, not an image") from None
+    except OSError as error:
+        raise ImageError(f"cannot read ({error.strerror or error})") from None
+    return check_input_size(size, max_pixels)
+
+
 def _check_complete(data: bytes) -> None:
     """Refuse empty files, and truncated JPEG and PNG files (OpenCV decodes those partially)."""
     if not data:

@@ -92,12 +92,15 @@ def open_atomic(
     descriptor, temporary = tempfile.mkstemp(
         dir=path.parent, prefix=f".{path.name}.gsrwt-{os.getpid()}-", suffix=".part"
     )
+    handle = os.fdopen(descriptor, mode, **kwargs)
     try:
-        with os.fdopen(descriptor, mode, **kwargs) as handle:
-            yield handle
+        yield handle
+        handle.close()  # a full disk shows here, when the last buffer is flushed
         os.chmod(temporary, 0o666 & ~current_umask())
         os.replace(temporary, path)
     except BaseException:
+        with contextlib.suppress(OSError):  # the first error is the one to report
+            handle.close()
         with contextlib.suppress(FileNotFoundError):
             os.unlink(temporary)
         raise

@@ -141,6 +141,9 @@ def refuse_unsafe_outputs(
 
 def prepare_directory(directory: Path, what: str) -> None:
     """Make ``directory`` and prove it writable (a temporary file), or raise InputError."""
+    blocker = next((p for p in [directory, *directory.parents] if p.exists()), None)
+    if blocker is not None and not blocker.is_dir():
+        raise InputError(f"{what}: cannot write there ({blocker} is not a directory)")
     try:
         directory.mkdir(parents=True, exist_ok=True)
         descriptor, probe = tempfile.mkstemp(
@@ -205,10 +208,17 @@ def open_table(path: str) -> Iterator[IO[str]]:
     """
     if path == "-":
         yield sys.stdout
-    else:
+        return
+    finished = False
+    try:
         with open_atomic(path, "w", encoding="utf-8", errors="surrogateescape",
                          newline="") as stream:
             yield stream
+            finished = True
+    except OSError as error:
+        if not finished:
+            raise
+        raise TableWriteError(error.strerror or str(error)) from None  # flushing at the end
 
 
 @click.command()
@@ -268,8 +278,9 @@ def rectify(
 
     \b
     Examples:
-      gsrwt rectify sample_data --sidecar sample_data/views.csv -o rectified
-      find . -name '*.jpg' | gsrwt rectify - --pan 15 --tilt 30 --focal 2800 -o out
+      gsrwt rectify sample_data/views --sidecar sample_data/views/views.csv -o rectified
+      find sample_data/views -name '*.jpg' | gsrwt rectify - \\
+          --sidecar sample_data/views/views.csv -o from-stdin
     """
     box = parse_bbox(bbox)
     positive("--max-stretch", max_stretch)
