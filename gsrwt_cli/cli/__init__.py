@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import errno
 import os
 import select
@@ -162,6 +163,11 @@ def run() -> None:
     """
     global started_as_command
     started_as_command = True
+    # File names are bytes on POSIX; Python gives a name that is not valid UTF-8 to us with
+    # its odd bytes as lone surrogates. Write those back as the very bytes they stand for,
+    # so the image column names the real file, instead of failing to encode the row.
+    with contextlib.suppress(AttributeError, ValueError):
+        sys.stdout.reconfigure(errors="surrogateescape")
     try:
         try:
             main(prog_name="gsrwt")

@@ -16,7 +16,7 @@ from ..imaging import (
     encode_image,
     read_image,
 )
-from ..messages import quote
+from ..messages import escape_controls, quote, shorten
 from ..outputs import OutsideOutputError, relative_output, write_atomic
 from ..render import render_view
 from ..sidecar import RecordError, SidecarError, format_sidecar, load_sidecar, view_from_values
@@ -29,6 +29,9 @@ from .options import (
     view_defaults,
     view_options,
 )
+
+#: Characters of a sidecar row's description (``views.yaml record 'NAME'``) in a message.
+WHERE_LIMIT = 160
 
 
 @click.command()
@@ -148,6 +151,7 @@ def sidecar_target(output: Path, image: str, claimed: dict[str, str], where: str
     ``output`` (:func:`~.options.output_target`), and not be the file of an earlier row or
     of the views' sidecar: ``claimed`` maps the real paths taken so far to what took them.
     """
+    where = shorten(escape_controls(where), WHERE_LIMIT)  # a YAML key may be any length
     try:
         target = output_target(output, relative_output(image))
     except OutsideOutputError as error:
