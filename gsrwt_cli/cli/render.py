@@ -93,7 +93,8 @@ def render(
             records = load_sidecar(sidecar).records
         except SidecarError as error:
             raise InputError(str(error)) from None
-        make_output_directory("-o", output)
+        if output.exists() and not output.is_dir():
+            raise InputError(f"-o {output}: exists and is not a directory")
         table_path = out_sidecar or output / "views.csv"
         views = []
         claimed: dict[str, str] = {os.path.realpath(table_path): "the views' sidecar"}
@@ -112,6 +113,8 @@ def render(
             raise InputError(f"{target}: would overwrite an input; choose another output")
         if os.path.lexists(target) and not overwrite:
             raise InputError(f"{target}: exists; use --overwrite to replace it")
+    if root is not None and views:
+        make_output_directory("-o", root)  # before the first write: the rule needs the root
     rows = []
     channels = 4 if alpha else (1 if pixels.ndim == 2 else pixels.shape[2])
     for name, view, target in views:
