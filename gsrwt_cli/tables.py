@@ -10,6 +10,7 @@ from __future__ import annotations
 import csv
 import json
 import math
+import re
 from collections.abc import Iterable, Mapping, Sequence
 from typing import IO, Any
 
@@ -17,6 +18,7 @@ FORMATS = ("table", "csv", "tsv", "json", "jsonl", "markdown")
 #: Decimal places of floats in the machine formats and in the human ones.
 MACHINE_DECIMALS = 6
 HUMAN_DECIMALS = 3
+_SURROGATE = re.compile("[\ud800-\udfff]")
 
 
 def format_from_extension(path: str) -> str | None:
@@ -74,6 +76,8 @@ class TableWriter:
         elif self.fmt in ("json", "jsonl"):
             record = {c: _json_value(v) for c, v in zip(self.columns, values)}
             text = json.dumps(record, ensure_ascii=False)
+            if _SURROGATE.search(text):  # a file name that is not UTF-8: escape it, so that
+                text = json.dumps(record)  # the JSON stays valid and json.loads gives it back
             if self.fmt == "jsonl":
                 self.stream.write(text + "\n")
             else:

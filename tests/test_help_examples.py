@@ -22,7 +22,6 @@ import pytest
 from conftest import run_gsrwt
 
 from gsrwt_cli.cli import main
-from gsrwt_cli.cli.rectify import rectify
 
 ROOT = Path(__file__).resolve().parent.parent
 #: Parameters that name what a command writes (the rest of the paths are read).
@@ -32,9 +31,6 @@ INPUT_PARAMETERS = {"inputs"}
 #: Programs other than gsrwt that examples may pipe from, and how to find their paths.
 OTHER_PROGRAMS = {"find"}
 
-# rectify's examples live in cli/rectify.py, changed by another branch of issue 9; until that
-# lands its old example (sample_data/views.csv) fails here. Strict: passing then is an error.
-RECTIFY_EXAMPLE_STALE = "sample_data/views.csv" in (rectify.help or "")
 
 
 def help_examples(command: str | None) -> list[str]:
@@ -116,14 +112,7 @@ def command_id(command: str | None) -> str:
     return command or "gsrwt"
 
 
-def marks(command: str | None) -> list[pytest.MarkDecorator]:
-    if command == "rectify" and RECTIFY_EXAMPLE_STALE:
-        return [pytest.mark.xfail(strict=True, reason="cli/rectify.py's examples are fixed "
-                                  "on another branch (issue 9 item 16)")]
-    return []
-
-
-PARAMETERS = [pytest.param(c, id=command_id(c), marks=marks(c)) for c in COMMANDS]
+PARAMETERS = [pytest.param(c, id=command_id(c)) for c in COMMANDS]
 
 
 @pytest.mark.parametrize("command", PARAMETERS)

@@ -407,13 +407,6 @@ def run_bytes(args: list[str | bytes], cwd: Path) -> subprocess.CompletedProcess
                           capture_output=True, timeout=300)
 
 
-def skip_if_imaging_crashes(result: subprocess.CompletedProcess) -> None:
-    """A SIGSEGV here is issue 9 item 4 (imaging.read_image hands a non-UTF-8 name to
-    cv2.imread), fixed in imaging.py by its owner; any other outcome is checked."""
-    if result.returncode == -signal.SIGSEGV:
-        pytest.xfail("imaging.read_image still passes non-UTF-8 names to cv2.imread (SIGSEGV)")
-
-
 @pytest.mark.parametrize("command", ["lines", "match"])
 def test_a_name_with_a_newline_is_a_correct_result(tmp_path, command):
     shutil.copy(VIEWS / "corridor_p0_t30.png", tmp_path / NEWLINE_NAME)
@@ -459,7 +452,6 @@ def test_a_name_that_is_not_utf8_is_a_correct_result(tmp_path, command):
     shutil.copy(VIEWS / "corridor_p0_t30.png", tmp_path / NOT_UTF8)
     extra = ["--template", str(KNOB), "--min-score", "0.1"] if command == "match" else []
     result = run_bytes([command, NOT_UTF8, *extra, "--draw", "drawn"], tmp_path)
-    skip_if_imaging_crashes(result)
     assert result.returncode == 0, result.stderr
     assert_clean_stderr(result.stderr.decode("utf-8", "backslashreplace"), error_lines=0)
     rows = result.stdout.splitlines()[1:]
@@ -472,7 +464,6 @@ def test_an_unreadable_file_that_is_not_utf8_is_one_line(tmp_path, command):
     (tmp_path / NOT_UTF8).write_bytes(b"not an image\n")
     extra = ["--template", str(KNOB)] if command == "match" else []
     result = run_bytes([command, NOT_UTF8, *extra], tmp_path)
-    skip_if_imaging_crashes(result)
     assert result.returncode == 1
     stderr = result.stderr.decode("utf-8", "backslashreplace")
     (line,) = assert_clean_stderr(stderr, error_lines=1)
@@ -487,7 +478,6 @@ def test_render_to_and_from_names_that_are_not_utf8(tmp_path):
     output = os.fsdecode(b"view\xfe.png")
     result = run_bytes(["render", NOT_UTF8, "--pan", "10", "--tilt", "20", "--focal", "300",
                         "--width", "80", "--height", "60", "-o", output], tmp_path)
-    skip_if_imaging_crashes(result)
     assert result.returncode == 0, result.stderr
     assert result.stderr == b""
     image = cv2.imdecode(np.fromfile(tmp_path / output, np.uint8), cv2.IMREAD_UNCHANGED)

@@ -7,6 +7,7 @@ import errno
 import os
 import select
 import sys
+import warnings
 from typing import Any, NoReturn
 
 import click
@@ -119,6 +120,11 @@ def main(ctx: click.Context, debug: bool) -> None:
       gsrwt params --pan 15 --tilt 30 --focal 280
     """
     ctx.meta["gsrwt.debug"] = debug
+    if not debug and not sys.warnoptions:
+        # Problems are reported as one-line errors; a library's warning (with its source
+        # path) would break that promise. The code checks what warnings would flag (values
+        # that are not finite); --debug or python -W shows them.
+        warnings.simplefilter("ignore")
 
 
 main.add_command(params)

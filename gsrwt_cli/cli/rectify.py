@@ -34,7 +34,7 @@ from ..imaging import (
     canonical_extension,
     check_writable,
 )
-from ..messages import one_line
+from ..messages import one_line, quote
 from ..outputs import open_atomic, remove_stale_temporaries
 from ..sidecar import SidecarError, load_sidecar
 from ..tables import TableWriter, format_from_extension, read_table
@@ -52,7 +52,7 @@ def parse_bbox(text: str) -> str | tuple[float, float, float, float]:
         box = ()
     if len(box) != 4 or not all(math.isfinite(v) for v in box):
         raise click.BadParameter(
-            f"expected frontal, full or X0,Y0,X1,Y1 (four numbers), got {text!r}",
+            f"expected frontal, full or X0,Y0,X1,Y1 (four numbers), got {quote(text)}",
             param_hint="'--bbox'",
         )
     if box[2] <= box[0] or box[3] <= box[1]:
@@ -70,7 +70,7 @@ def parse_pixel_count(text: str, option: str) -> float:
     except ValueError:
         value = math.nan
     if not math.isfinite(value) or value < 1:
-        raise click.BadParameter(f"expected a pixel count such as 50M, got {text!r}",
+        raise click.BadParameter(f"expected a pixel count such as 50M, got {quote(text)}",
                                  param_hint=f"'{option}'")
     return value
 
