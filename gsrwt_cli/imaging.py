@@ -7,6 +7,7 @@ import io
 import os
 import sys
 import tempfile
+import threading
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -41,9 +42,16 @@ DEFAULT_MAX_INPUT_PIXELS = 300e6
 
 _CANONICAL_EXTENSION = {".jpeg": ".jpg", ".jpe": ".jpg", ".tiff": ".tif"}
 
-# OpenCV's own warnings would break the one-line-per-problem promise.
-with contextlib.suppress(AttributeError):  # older OpenCV builds lack cv2.utils.logging
-    cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_SILENT)
+
+
+def silence_opencv_logging() -> None:
+    """Stop OpenCV's own log lines (process-wide: for the ``gsrwt`` command, not a library).
+
+    They would break the one-line-per-problem promise; what gsrwt needs from the codecs it
+    collects itself (:func:`_codec_messages`).
+    """
+    with contextlib.suppress(AttributeError):  # older OpenCV builds lack cv2.utils.logging
+        cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_SILENT)
 
 
 class ImageError(Exception):
@@ -185,20 +193,34 @@ def check_input_size(size: tuple[int, int] | None, max_pixels: float) -> tuple[i
     return size
 
 
+_STDERR_CAPTURE = threading.Lock()
+
+
 @contextlib.contextmanager
 def _codec_messages() -> Iterator[list[str]]:
     """Collect what the C codecs (libjpeg, libpng) print on stderr instead of letting it out.
 
     libjpeg reports damaged data only there ("Corrupt JPEG data: ...", "Premature end of JPEG
     file") and still returns an image; collected, such messages become errors.
+
+    File descriptor 2 belongs to the whole process, so two threads cannot each redirect it:
+    a lock serializes captures (and so decodes) between the threads of one process, and
+    whatever another thread writes to fd 2 during a capture lands in it too (and is dropped).
+    The batch runner decodes in worker processes of one thread each, where neither happens.
     """
     messages: list[str] = []
+    with _STDERR_CAPTURE, _captured_stderr(messages):
+        yield messages
+
+
+@contextlib.contextmanager
+def _captured_stderr(messages: list[str]) -> Iterator[None]:
     sys.stderr.flush()
     saved = os.dup(2)
     with tempfile.TemporaryFile() as sink:
         os.dup2(sink.fileno(), 2)
         try:
-            yield messages
+            yield
         finally:
             os.dup2(saved, 2)
             os.close(saved)

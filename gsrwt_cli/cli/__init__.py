@@ -13,6 +13,7 @@ from typing import Any, NoReturn
 import click
 
 from .. import __version__
+from ..imaging import silence_opencv_logging
 from ..messages import escape_controls, one_line, shorten
 from .gaze import gaze, track
 from .landmarks import lines, match
@@ -160,6 +161,14 @@ def _end_for_closed_stdout() -> NoReturn:
     sys.exit(CLOSED_STDOUT_STATUS)
 
 
+class CommandProcess:
+    """The context object of a process the ``gsrwt`` command started (not a library user's
+    or a test's): there the batch may fork its workers from the main process, which has run
+    no OpenCV code."""
+
+    fork_workers = True
+
+
 def run() -> None:
     """The ``gsrwt`` console script: :data:`main` in a process of its own.
 
@@ -167,8 +176,7 @@ def run() -> None:
     (:func:`_end_for_closed_stdout`), whether the pipe broke while a command wrote, while
     click printed help or an error, or at the final flush of what was still buffered.
     """
-    global started_as_command
-    started_as_command = True
+    silence_opencv_logging()
     # File names are bytes on POSIX; Python gives a name that is not valid UTF-8 to us with
     # its odd bytes as lone surrogates. Write those back as the very bytes they stand for,
     # so the image column names the real file, instead of failing to encode the row.
@@ -176,7 +184,7 @@ def run() -> None:
         sys.stdout.reconfigure(errors="surrogateescape")
     try:
         try:
-            main(prog_name="gsrwt")
+            main(prog_name="gsrwt", obj=CommandProcess())
         except SystemExit:
             # The last rows may still sit in the buffer: flush them now, where a closed
             # pipe can be handled, not during interpreter shutdown.
@@ -190,7 +198,3 @@ def run() -> None:
             _end_for_closed_stdout()
         raise
 
-
-#: True in a process the ``gsrwt`` command started (not in a library user's or a test's):
-#: there the batch may fork its workers from the main process, which has run no OpenCV code.
-started_as_command = False

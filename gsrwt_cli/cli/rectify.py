@@ -16,7 +16,6 @@ from typing import IO, Any
 import click
 from tqdm import tqdm
 
-from .. import cli as cli_package
 from ..batch import (
     RECTIFY_COLUMNS,
     Counts,
@@ -282,6 +281,7 @@ def rectify(
       find sample_data/views -name '*.jpg' | gsrwt rectify - \\
           --sidecar sample_data/views/views.csv -o from-stdin
     """
+    fork_workers = getattr(click.get_current_context().find_root().obj, "fork_workers", False)
     box = parse_bbox(bbox)
     positive("--max-stretch", max_stretch)
     positive("--scale", scale)
@@ -367,7 +367,7 @@ def rectify(
             try:
                 run_batch(job_list, settings, processes, on_row,
                           on_progress=lambda: progress.update(1), previous=previous,
-                          context=worker_context(cli_package.started_as_command))
+                          context=worker_context(fork_workers))
             except (KeyboardInterrupt, Terminated) as stop:
                 stopped = stop  # every job has its row: the table is still written whole
             try:
