@@ -133,14 +133,13 @@ def high_water_kib() -> int:
 
 def worker_memory(folder: Path, out: Path) -> None:
     """Run one gsrwt worker's loop over all images; print idle and peak memory (KiB)."""
-    from gsrwt_cli.batch import Job, Settings, _init_worker, process_job
+    from gsrwt_cli.batch import ImageWorker, Job, Settings
 
-    settings = Settings(overwrite=True, threads_per_worker=1)
-    _init_worker(settings)
+    worker = ImageWorker(Settings(overwrite=True), opencv_threads=1)
     idle = high_water_kib()
     for path, pan, tilt in _views(folder):
         job = Job(path, out / path.name, {"pan": pan, "tilt": tilt, "focal": FOCAL}, "bench")
-        assert process_job(job, settings)["status"] == "ok"
+        assert worker(job)["status"] == "ok"
     print(idle, high_water_kib())
 
 

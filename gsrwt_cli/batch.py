@@ -2,31 +2,40 @@
 
 Each image becomes a :class:`Job` in the main process (cheap: paths and parameter values),
 and a table row in a worker (read, warp, write atomically). Only one image per worker is in
-memory at a time; rows come back in input order.
+memory at a time; rows come back in input order. Every image gets a row that tells the truth,
+whatever happens to it or to its worker.
 """
 
 from __future__ import annotations
 
+import contextlib
 import multiprocessing
 import os
-from collections.abc import Callable, Iterable, Iterator
+import warnings
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path, PurePosixPath
 from typing import Any
 
 import cv2
+import numpy as np
 
 from .camera import View
+from .executor import ProcessExecutor
 from .imaging import (
+    DEFAULT_MAX_INPUT_PIXELS,
     IMAGE_EXTENSIONS,
     ImageError,
     Scratch,
     check_writable,
     encode_image,
+    image_file_size,
+    measure_image_file,
 )
-from .outputs import write_atomic
+from .messages import one_line
+from .outputs import OutsideOutputError, check_inside, remove_stale_temporaries, write_atomic
 from .parameters import Found, NotFound, Problem, resolve_parameters
-from .rectify import plan_image
+from .rectify import RectifyInfo, plan_image
 from .report import PARAMS_COLUMNS, params_row
 from .sidecar import RecordError, Sidecar, view_from_values
 
@@ -53,13 +62,28 @@ def is_image_name(path: Path) -> bool:
     return path.suffix.lower() in IMAGE_EXTENSIONS and not path.name.startswith(".")
 
 
-def sources_from_directory(directory: Path, recursive: bool) -> list[Source]:
-    """Images in a directory (sorted), with paths relative to it; hidden files are skipped."""
+def sources_from_directory(
+    directory: Path, recursive: bool, unreadable: list[str] | None = None
+) -> list[Source]:
+    """Images in a directory (sorted), with paths relative to it; hidden files are skipped.
+
+    Symbolic links to directories are not followed. A subdirectory that cannot be listed is
+    reported in ``unreadable`` (``"DIR: cannot read directory (reason)"``); if the directory
+    itself cannot be listed, ``OSError`` is raised.
+    """
     if recursive:
         found = []
-        for root, dirs, files in os.walk(directory):
+        problems: list[OSError] = []
+        for root, dirs, files in os.walk(directory, onerror=problems.append):
             dirs[:] = sorted(d for d in dirs if not d.startswith("."))
             found += [Path(root) / name for name in sorted(files)]
+        for problem in problems:
+            if os.path.abspath(problem.filename or "") == os.path.abspath(directory):
+                raise problem
+            if unreadable is not None:
+                unreadable.append(
+                    f"{problem.filename}: cannot read directory ({problem.strerror})"
+                )
     else:
         found = sorted(p for p in directory.iterdir() if p.is_file())
     return [
@@ -92,6 +116,7 @@ class Job:
     values: dict[str, Any] | None  # raw parameters from the first source that has them
     where: str  # where the parameters came from, for messages
     error: str | None = None  # known before reading the image
+    existed: bool = False  # the output existed when the run began
 
 
 @dataclass(frozen=True)
@@ -109,7 +134,8 @@ class Settings:
     quality: int = 95
     overwrite: bool = False
     dry_run: bool = False
-    threads_per_worker: int = 0  # 0: OpenCV's default
+    max_input_pixels: float = DEFAULT_MAX_INPUT_PIXELS
+    root: Path | None = None  # the output directory: nothing is written outside it
 
 
 def plan_jobs(
@@ -119,7 +145,11 @@ def plan_jobs(
     fallback: dict[str, Any],
     extension: str | None,
 ) -> list[Job]:
-    """One job per source; outputs mirror relative paths under ``outdir``."""
+    """One job per source; outputs mirror relative paths under ``outdir``.
+
+    An output whose directory leads out of ``outdir`` (through a symbolic link) is an error
+    of its job, as is an output that another job also claims.
+    """
     jobs = []
     claimed: dict[Path, Path] = {}
     for source in sources:
@@ -137,94 +167,170 @@ def plan_jobs(
         if output in claimed:
             error = f"its output {output} is also the output of {claimed[output]}"
         claimed.setdefault(output, source.path)
-        jobs.append(Job(source.path, output, values, where, error))
+        if error is None:
+            try:
+                check_inside(outdir, output)
+            except OutsideOutputError as problem:
+                error = f"its output {output} {problem}"
+        existed = error is None and os.path.lexists(output)
+        jobs.append(Job(source.path, output, values, where, error, existed))
     return jobs
 
 
 # --------------------------------------------------------------------------------------------
-# Workers
+# One image: the work of a worker, and the rows the parent makes itself
 # --------------------------------------------------------------------------------------------
-
-_settings = Settings()
-_scratch = Scratch()
-
-
-def _init_worker(settings: Settings) -> None:
-    global _settings, _scratch
-    _settings, _scratch = settings, Scratch()
-    if settings.threads_per_worker:
-        cv2.setNumThreads(settings.threads_per_worker)
 
 
 def _homography_text(matrix) -> str:
     return " ".join(f"{value:.12g}" for value in matrix.ravel())
 
 
-def process_job(job: Job, settings: Settings | None = None) -> dict[str, Any]:
-    """Rectify one image and return its table row; never raises for a bad image."""
-    settings = settings or _settings
-    row: dict[str, Any] = {"image": str(job.source), "output": str(job.output)}
-    view: View | None = None
-    try:
-        if job.error is not None:
-            raise _JobError(job.error)
-        assert job.values is not None
-        try:
-            view = view_from_values(job.values, job.where)
-        except RecordError as error:
-            raise _JobError(str(error)) from None
-        row.update(params_row(view, str(job.source)))
-        if job.output.exists() and not settings.overwrite:
-            row["status"] = "skipped"
-            return row
-        if not job.source.is_file():
-            raise _JobError("no such file" if not job.source.exists() else "not a file")
-        shape, dtype = _scratch.read(job.source)
-        channels = 1 if len(shape) == 2 else shape[2]
-        check_writable(
-            job.output.suffix, dtype, 4 if settings.alpha and channels in (1, 3) else channels
-        )
-        info = plan_image(
-            view,
-            shape[1],
-            shape[0],
-            bbox=settings.bbox,
-            scale=settings.scale,
-            px_per_unit=settings.px_per_unit,
-            max_stretch=settings.max_stretch,
-            max_pixels=settings.max_pixels,
-        )
-        if not settings.dry_run:
-            warped = _scratch.warp(
-                info.homography, info.size, settings.interpolation, settings.fill,
-                settings.alpha,
-            )
-            write_atomic(job.output, encode_image(warped, job.output.suffix, settings.quality))
-        row.update(params_row(info.view, str(job.source)))
-        row.update(
-            out_width=info.size[0],
-            out_height=info.size[1],
-            homography=_homography_text(info.homography),
-            status="ok",
-        )
-    except (_JobError, ImageError, ValueError, OSError) as error:
-        row.update(status="error", error=_one_line(error))
-    return row
-
-
 class _JobError(Exception):
     pass
 
 
-def _one_line(error: BaseException) -> str:
+def _error_text(error: BaseException) -> str:
+    """One line for a failure: the reason for expected errors, the type for unexpected ones."""
     if isinstance(error, OSError) and error.strerror:
         text = error.strerror + (f": {error.filename}" if error.filename else "")
-    else:
+    elif isinstance(error, (_JobError, ImageError, OutsideOutputError, RecordError, ValueError)):
         text = str(error)
-    return " ".join(text.split())
+    else:
+        text = f"internal error: {type(error).__name__}: {error}"
+    return one_line(" ".join(text.split()), 500)
 
 
-def _worker_context(fork_from_caller: bool = False) -> multiprocessing.context.BaseContext:
+def _view(job: Job) -> View:
+    if job.error is not None:
+        raise _JobError(job.error)
+    assert job.values is not None
+    try:
+        return view_from_values(job.values, job.where)
+    except RecordError as error:
+        raise _JobError(str(error)) from None
+
+
+def _geometry(info: RectifyInfo) -> dict[str, Any]:
+    return {
+        **params_row(info.view, None),
+        "out_width": info.size[0],
+        "out_height": info.size[1],
+        "homography": _homography_text(info.homography),
+    }
+
+
+def _plan(view: View, width: int, height: int, settings: Settings) -> RectifyInfo:
+    return plan_image(
+        view, width, height, bbox=settings.bbox, scale=settings.scale,
+        px_per_unit=settings.px_per_unit, max_stretch=settings.max_stretch,
+        max_pixels=settings.max_pixels,
+    )
+
+
+def process_job(job: Job, settings: Settings, scratch: Scratch | None = None) -> dict[str, Any]:
+    """Rectify one image and return its table row; never raises for a bad image.
+
+    ``scratch``: the worker's reusable memory (a fresh one if not given). Whatever goes
+    wrong, from a bad parameter to an overflow deep in the geometry, becomes the row's
+    ``error``; a result that is not finite is an error, never ``ok``.
+    """
+    scratch = scratch or Scratch()
+    row: dict[str, Any] = {"image": str(job.source), "output": str(job.output)}
+    try:
+        with np.errstate(all="ignore"), warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            view = _view(job)
+            row.update(params_row(view, str(job.source)))
+            if job.output.exists() and not settings.overwrite:
+                return record_row(job, settings)
+            if not job.source.is_file():
+                raise _JobError("no such file" if not job.source.exists() else "not a file")
+            width, height = measure_image_file(job.source, settings.max_input_pixels)
+            info = _plan(view, width, height, settings)  # refuses big outputs undecoded
+            shape, dtype = scratch.read(job.source, settings.max_input_pixels)
+            channels = 1 if len(shape) == 2 else shape[2]
+            check_writable(
+                job.output.suffix, dtype,
+                4 if settings.alpha and channels in (1, 3) else channels, info.size,
+            )
+            if not settings.dry_run:
+                warped = scratch.warp(
+                    info.homography, info.size, settings.interpolation, settings.fill,
+                    settings.alpha,
+                )
+                encoded = encode_image(warped, job.output.suffix, settings.quality)
+                del warped
+                write_atomic(job.output, encoded, root=settings.root)
+        row.update(_geometry(info), image=str(job.source), status="ok")
+    except Exception as error:  # every failure of one image is that image's row
+        row.update(status="error", error=_error_text(error))
+    return row
+
+
+def record_row(job: Job, settings: Settings, status: str = "skipped") -> dict[str, Any]:
+    """The full row of an image whose output exists, without decoding anything.
+
+    The geometry comes from the input's header size and these settings; if the existing
+    output's size disagrees with it, ``error`` says so (it was made with other options).
+    """
+    row: dict[str, Any] = {"image": str(job.source), "output": str(job.output)}
+    try:
+        with np.errstate(all="ignore"):
+            view = _view(job)
+            row.update(params_row(view, str(job.source)))
+            size = measure_image_file(job.source, settings.max_input_pixels)
+            info = _plan(view, size[0], size[1], settings)
+        row.update(_geometry(info), image=str(job.source), status=status)
+        existing = image_file_size(job.output)
+        if existing is not None and existing != info.size:
+            row["error"] = (
+                f"the existing output is {existing[0]}x{existing[1]}, not the "
+                f"{info.size[0]}x{info.size[1]} of these options; use --overwrite to redo it"
+            )
+    except Exception as error:
+        row.update(status=status, error=f"output exists; its geometry is unknown: "
+                   f"{_error_text(error)}")
+    return row
+
+
+def died_row(job: Job, reason: str) -> dict[str, Any]:
+    """The row of an image whose worker died while working on it."""
+    row: dict[str, Any] = {"image": str(job.source), "output": str(job.output)}
+    with contextlib.suppress(Exception), np.errstate(all="ignore"):
+        row.update(params_row(_view(job), str(job.source)))
+    row.update(status="error", error=reason)
+    return row
+
+
+def interrupted_row(job: Job, settings: Settings) -> dict[str, Any]:
+    """The row of an image the run did not finish: its record if its output exists."""
+    if job.output.exists():
+        return record_row(job, settings, status="ok" if not job.existed else "skipped")
+    row = died_row(job, "not done: the run was interrupted")
+    row["status"] = "interrupted"
+    return row
+
+
+class ImageWorker:
+    """One worker's state: the settings and the memory reused from image to image."""
+
+    def __init__(self, settings: Settings, opencv_threads: int = 0) -> None:
+        self.settings = settings
+        self.scratch = Scratch()
+        if opencv_threads:
+            cv2.setNumThreads(opencv_threads)
+
+    def __call__(self, job: Job) -> dict[str, Any]:
+        return process_job(job, self.settings, self.scratch)
+
+
+# --------------------------------------------------------------------------------------------
+# The batch: jobs to workers, rows back in input order
+# --------------------------------------------------------------------------------------------
+
+
+def worker_context(fork_from_caller: bool = False) -> multiprocessing.context.BaseContext:
     """How workers start.
 
     By default they fork from a fresh server that has imported this module once, never from
@@ -243,40 +349,26 @@ def _worker_context(fork_from_caller: bool = False) -> multiprocessing.context.B
     return multiprocessing.get_context("spawn")
 
 
-def run_jobs(
-    jobs: list[Job], settings: Settings, processes: int, fork_from_caller: bool = False
-) -> Iterator[dict[str, Any]]:
-    """Rows of all jobs, in job order, computed by ``processes`` worker processes
-    (started as :func:`_worker_context` says)."""
-    processes = max(1, min(processes, len(jobs)))
-    if processes == 1:
-        _init_worker(settings)
-        for job in jobs:
-            yield process_job(job, settings)
-        return
-    context = _worker_context(fork_from_caller)
-    threads = Settings(**{**settings.__dict__, "threads_per_worker": 1})
-    with context.Pool(processes, initializer=_init_worker, initargs=(threads,)) as pool:
-        try:
-            yield from pool.imap(process_job, jobs, chunksize=1)
-        except BaseException:
-            pool.terminate()
-            raise
-
-
 @dataclass
 class Counts:
     ok: int = 0
     skipped: int = 0
     failed: int = 0
+    interrupted: int = 0
 
     def add(self, row: dict[str, Any]) -> None:
         if row["status"] == "ok":
             self.ok += 1
         elif row["status"] == "skipped":
             self.skipped += 1
+        elif row["status"] == "interrupted":
+            self.interrupted += 1
         else:
             self.failed += 1
+
+
+def _remove_temporaries_of(job: Job, pid: int) -> None:
+    remove_stale_temporaries(job.output.parent, {pid})
 
 
 def run_batch(
@@ -284,12 +376,73 @@ def run_batch(
     settings: Settings,
     processes: int,
     on_row: Callable[[dict[str, Any]], None],
-    fork_from_caller: bool = False,
+    *,
+    on_progress: Callable[[], None] | None = None,
+    previous: Mapping[tuple[str, str], Mapping[str, Any]] | None = None,
+    context: multiprocessing.context.BaseContext | None = None,
 ) -> Counts:
-    """Run all jobs, handing each row to ``on_row`` as it completes; returns the counts."""
+    """Run all jobs, handing each row to ``on_row`` in job order; returns the counts.
+
+    Images are rectified in ``processes`` worker processes (:class:`~gsrwt_cli.executor.
+    ProcessExecutor`: a worker that dies costs only its image). Images whose output exists
+    (without ``overwrite``) and jobs known to fail are rowed here, without a worker; their
+    row comes from ``previous`` (the last table's rows by ``(image, output)``) when it has
+    one, else from :func:`record_row`. If the run is stopped (an exception such as
+    ``KeyboardInterrupt``), the workers are stopped, every job not done gets its row
+    (:func:`interrupted_row`), and the exception goes on.
+    """
     counts = Counts()
-    for row in run_jobs(jobs, settings, processes, fork_from_caller):
-        counts.add(row)
-        on_row(row)
+    rows: dict[int, dict[str, Any]] = {}
+    state = {"next": 0}
+
+    def parent_row(job: Job) -> dict[str, Any]:
+        if job.error is None and job.existed and not settings.overwrite:
+            earlier = (previous or {}).get((str(job.source), str(job.output)))
+            if earlier is not None and earlier.get("status") in ("ok", "skipped"):
+                return {**earlier, "status": "skipped"}
+            return record_row(job, settings)
+        return process_job(job, settings)
+
+    def emit_ready(fill: Callable[[Job], dict[str, Any]] | None = None) -> None:
+        while state["next"] < len(jobs):
+            index = state["next"]
+            if index not in rows:
+                if index not in parent_jobs and fill is None:
+                    return
+                rows[index] = (fill or parent_row)(jobs[index])
+                if on_progress is not None:
+                    on_progress()
+            row = rows.pop(index)
+            counts.add(row)
+            on_row(row)
+            state["next"] += 1
+
+    def is_parent_job(job: Job) -> bool:
+        return job.error is not None or (job.existed and not settings.overwrite)
+
+    parent_jobs = {index for index, job in enumerate(jobs) if is_parent_job(job)}
+    worker_jobs = [index for index in range(len(jobs)) if index not in parent_jobs]
+    executor: ProcessExecutor[Job, dict[str, Any]] = ProcessExecutor(
+        ImageWorker, (settings, 1 if processes > 1 else 0),
+        max(1, min(processes, len(worker_jobs))),
+        on_death=died_row, on_abandon=_remove_temporaries_of,
+        context=context or worker_context(),
+    )
+    results = executor.map_unordered([jobs[index] for index in worker_jobs])
+    try:
+        emit_ready()
+        for position, row in results:
+            rows[worker_jobs[position]] = row
+            if on_progress is not None:
+                on_progress()
+            emit_ready()
+        emit_ready()
+    except BaseException:
+        results.close()  # stops the workers, removes what they left half-written
+        emit_ready(lambda job: parent_row(job) if is_parent_job(job) else interrupted_row(
+            job, settings))
+        raise
+    finally:
+        results.close()
     return counts
 

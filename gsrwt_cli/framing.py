@@ -7,6 +7,7 @@ Pure geometry: no I/O.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -85,10 +86,10 @@ class Frame:
 
     @property
     def size(self) -> tuple[int, int]:
-        """Output ``(width, height)`` in pixels."""
+        """Output ``(width, height)`` in pixels; ``ValueError`` if it is not a finite size."""
         return (
-            max(0, round(self.scale * (self.x1 - self.x0))),
-            max(0, round(self.scale * (self.y1 - self.y0))),
+            _whole_pixels(self.scale * (self.x1 - self.x0)),
+            _whole_pixels(self.scale * (self.y1 - self.y0)),
         )
 
     def output_from_default(self) -> Matrix:
@@ -97,6 +98,19 @@ class Frame:
         return np.array(
             [[k, 0.0, k * (0.5 - self.x0) - 0.5], [0.0, k, k * (0.5 - self.y0) - 0.5], [0, 0, 1]]
         )
+
+
+#: Output sides beyond this many pixels are refused before any size arithmetic overflows.
+MAX_SIDE = 1 << 30
+
+
+def _whole_pixels(length: float) -> int:
+    if not math.isfinite(length) or length > MAX_SIDE:
+        raise ValueError(
+            f"the output would be {length:.3g} pixels across, more than any image can be; "
+            "check the scale, the bounding box and the distance"
+        )
+    return max(0, round(length))
 
 
 def default_frame(view: View, scale: float = 1.0) -> Frame:
@@ -175,6 +189,22 @@ def plan_output(
     """
     if view.width is None or view.height is None:
         raise ValueError("the image size is needed to frame the output")
+    with np.errstate(all="ignore"):  # non-finite results are checked below, not warned about
+        plan = _plan_output(view, bbox, scale, max_stretch, max_pixels)
+    if not np.all(np.isfinite(plan.homography)):
+        raise ValueError(
+            "the transform is not finite for this view (pan or tilt too close to 90 degrees?)"
+        )
+    return plan
+
+
+def _plan_output(
+    view: View,
+    bbox: str | tuple[float, float, float, float],
+    scale: float,
+    max_stretch: float,
+    max_pixels: float,
+) -> Plan:
     if bbox == "frontal":
         frame = default_frame(view, scale)
     elif bbox == "full":

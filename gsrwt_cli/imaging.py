@@ -3,14 +3,18 @@
 from __future__ import annotations
 
 import contextlib
+import io
 import os
 import sys
 import tempfile
+import threading
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
+from typing import IO
 
 import cv2
+import imagesize
 import numpy as np
 
 from .geometry import Matrix
@@ -33,11 +37,21 @@ _WRITABLE: dict[str, tuple[frozenset[str], frozenset[int]]] = {
     ".bmp": (frozenset({"uint8"}), frozenset({1, 3})),
     ".webp": (frozenset({"uint8"}), frozenset({3, 4})),
 }
+#: Inputs whose header claims more pixels than this are refused before decoding.
+DEFAULT_MAX_INPUT_PIXELS = 300e6
+
 _CANONICAL_EXTENSION = {".jpeg": ".jpg", ".jpe": ".jpg", ".tiff": ".tif"}
 
-# OpenCV's own warnings would break the one-line-per-problem promise.
-with contextlib.suppress(AttributeError):  # older OpenCV builds lack cv2.utils.logging
-    cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_SILENT)
+
+
+def silence_opencv_logging() -> None:
+    """Stop OpenCV's own log lines (process-wide: for the ``gsrwt`` command, not a library).
+
+    They would break the one-line-per-problem promise; what gsrwt needs from the codecs it
+    collects itself (:func:`_codec_messages`).
+    """
+    with contextlib.suppress(AttributeError):  # older OpenCV builds lack cv2.utils.logging
+        cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_SILENT)
 
 
 class ImageError(Exception):
@@ -52,21 +66,46 @@ def canonical_extension(extension: str) -> str:
     return _CANONICAL_EXTENSION.get(ext, ext)
 
 
-def check_writable(extension: str, dtype: np.dtype, channels: int) -> None:
-    """Raise :class:`ImageError` if a file of ``extension`` cannot hold such pixels."""
+#: Largest width and height each output format can hold.
+_MAX_SIDE = {".jpg": 65535, ".webp": 16383, ".png": 2**31 - 1, ".tif": 2**31 - 1,
+             ".bmp": 2**31 - 1}
+_DEPTH_NAMES = {"uint8": "8-bit", "uint16": "16-bit", "float32": "32-bit float",
+                "float64": "64-bit float", "int16": "signed 16-bit", "int8": "signed 8-bit",
+                "int32": "signed 32-bit"}
+_CHANNEL_NAMES = {1: "grey", 3: "colour", 4: "alpha (RGBA)"}
+
+
+def check_writable(
+    extension: str, dtype: np.dtype, channels: int, size: tuple[int, int] | None = None
+) -> None:
+    """Raise :class:`ImageError` if a file of ``extension`` cannot hold such pixels.
+
+    ``size``: the image's ``(width, height)``, checked against the format's largest side.
+    The message names the formats that can hold the image, or says that none can.
+    """
     ext = canonical_extension(extension)
     if ext not in _WRITABLE:
         raise ImageError(f"cannot write '{extension}' files; use one of {', '.join(_WRITABLE)}")
+    dtype_name = np.dtype(dtype).name
     dtypes, channel_counts = _WRITABLE[ext]
-    depth = {"uint8": "8-bit", "uint16": "16-bit", "float32": "32-bit float"}.get(
-        np.dtype(dtype).name, np.dtype(dtype).name
-    )
-    if np.dtype(dtype).name not in dtypes:
-        raise ImageError(f"{ext} cannot store {depth} images; use --ext png or --ext tif")
-    if channels not in channel_counts:
-        what = {1: "grey", 3: "colour", 4: "alpha (RGBA)"}.get(channels, f"{channels}-channel")
-        raise ImageError(f"{ext} cannot store {what} images; use --ext png or --ext tif")
-
+    what = None
+    if dtype_name not in dtypes:
+        what = f"{_DEPTH_NAMES.get(dtype_name, dtype_name)} images"
+    elif channels not in channel_counts:
+        what = f"{_CHANNEL_NAMES.get(channels, f'{channels}-channel')} images"
+    elif size is not None and max(size) > _MAX_SIDE[ext]:
+        what = (f"images over {_MAX_SIDE[ext]} pixels wide or high (this one is "
+                f"{size[0]}x{size[1]})")
+    if what is None:
+        return
+    others = [
+        other.lstrip(".") for other, (other_dtypes, other_channels) in _WRITABLE.items()
+        if other != ext and dtype_name in other_dtypes and channels in other_channels
+        and (size is None or max(size) <= _MAX_SIDE[other])
+    ]
+    advice = (f"use --ext {' or --ext '.join(others)}" if others
+              else "no output format gsrwt writes can hold them")
+    raise ImageError(f"{ext} cannot store {what}; {advice}")
 
 
 # --------------------------------------------------------------------------------------------
@@ -74,18 +113,87 @@ def check_writable(extension: str, dtype: np.dtype, channels: int) -> None:
 # --------------------------------------------------------------------------------------------
 
 
-def _check_complete(path: str) -> None:
+def read_file_bytes(path: str | Path) -> bytes:
+    """The bytes of a file, read by Python (any file name the system allows, none to OpenCV)."""
+    try:
+        with open(path, "rb") as handle:
+            return handle.read()
+    except IsADirectoryError:
+        raise ImageError("is a directory, not an image") from None
+    except OSError as error:
+        raise ImageError(f"cannot read ({error.strerror or error})") from None
+
+
+def header_size(data: bytes | IO[bytes]) -> tuple[int, int] | None:
+    """``(width, height)`` from an image file's header, without decoding it; None if unknown.
+
+    ``data``: the file's bytes or an open binary file. Uses the ``imagesize`` package, which
+    reads the header of JPEG, PNG, TIFF, BMP, WebP and other formats (EXIF rotation ignored,
+    as everywhere in gsrwt).
+    """
+    stream = io.BytesIO(data) if isinstance(data, (bytes, bytearray, memoryview)) else data
+    try:
+        width, height = imagesize.get(stream, exif_rotation=False)
+    except Exception:  # a damaged header: imagesize's parsers raise many kinds of errors
+        return None
+    if not (isinstance(width, int) and isinstance(height, int)) or width < 1 or height < 1:
+        return None
+    return width, height
+
+
+def image_file_size(path: str | Path) -> tuple[int, int] | None:
+    """``(width, height)`` of an image file from its header (:func:`header_size`)."""
+    try:
+        with open(path, "rb") as handle:
+            return header_size(handle)
+    except OSError:
+        return None
+
+
+def measure_image_file(path: str | Path, max_pixels: float) -> tuple[int, int]:
+    """``(width, height)`` of an image file from its header, refused as :func:`decode_image`
+    would refuse it (empty, unreadable, unmeasurable, above ``max_pixels``), undecoded."""
+    try:
+        with open(path, "rb") as handle:
+            if not handle.read(1):
+                raise ImageError("empty file")
+            handle.seek(0)
+            size = header_size(handle)
+    except IsADirectoryError:
+        raise ImageError("is a directory, not an image") from None
+    except OSError as error:
+        raise ImageError(f"cannot read ({error.strerror or error})") from None
+    return check_input_size(size, max_pixels)
+
+
+def _check_complete(data: bytes) -> None:
     """Refuse empty files, and truncated JPEG and PNG files (OpenCV decodes those partially)."""
-    with open(path, "rb") as handle:
-        head = handle.read(8)
-        if not head:
-            raise ImageError("empty file")
-        handle.seek(max(0, os.fstat(handle.fileno()).st_size - 64))
-        tail = handle.read().rstrip(b"\x00")
+    if not data:
+        raise ImageError("empty file")
+    head, tail = data[:8], data[-64:].rstrip(b"\x00")
     if head[:3] == b"\xff\xd8\xff" and not tail.endswith(b"\xff\xd9"):
         raise ImageError("truncated JPEG (no end-of-image marker)")
     if head == b"\x89PNG\r\n\x1a\n" and b"IEND" not in tail:
         raise ImageError("truncated PNG (no IEND chunk)")
+
+
+def check_input_size(size: tuple[int, int] | None, max_pixels: float) -> tuple[int, int]:
+    """Refuse an image whose header is unreadable or claims more than ``max_pixels`` pixels."""
+    if size is None:
+        raise ImageError(
+            "not an image gsrwt can decode (no JPEG, PNG, TIFF, BMP or WebP header)"
+        )
+    width, height = size
+    if width * height > max_pixels:
+        raise ImageError(
+            f"its header says {width}x{height} = {width * height / 1e6:.1f} megapixels, above "
+            f"the input limit of {max_pixels / 1e6:g} megapixels (a damaged file or a "
+            "decompression bomb?)",
+        )
+    return size
+
+
+_STDERR_CAPTURE = threading.Lock()
 
 
 @contextlib.contextmanager
@@ -94,14 +202,25 @@ def _codec_messages() -> Iterator[list[str]]:
 
     libjpeg reports damaged data only there ("Corrupt JPEG data: ...", "Premature end of JPEG
     file") and still returns an image; collected, such messages become errors.
+
+    File descriptor 2 belongs to the whole process, so two threads cannot each redirect it:
+    a lock serializes captures (and so decodes) between the threads of one process, and
+    whatever another thread writes to fd 2 during a capture lands in it too (and is dropped).
+    The batch runner decodes in worker processes of one thread each, where neither happens.
     """
     messages: list[str] = []
+    with _STDERR_CAPTURE, _captured_stderr(messages):
+        yield messages
+
+
+@contextlib.contextmanager
+def _captured_stderr(messages: list[str]) -> Iterator[None]:
     sys.stderr.flush()
     saved = os.dup(2)
     with tempfile.TemporaryFile() as sink:
         os.dup2(sink.fileno(), 2)
         try:
-            yield messages
+            yield
         finally:
             os.dup2(saved, 2)
             os.close(saved)
@@ -110,36 +229,40 @@ def _codec_messages() -> Iterator[list[str]]:
             messages.extend(line.strip() for line in text.splitlines() if line.strip())
 
 
-def read_image(path: str | Path, into: np.ndarray | None = None) -> np.ndarray:
-    """Read an image file as it is stored: 8/16-bit or float, grey, colour (BGR) or BGRA.
+def decode_image(data: bytes, max_pixels: float = DEFAULT_MAX_INPUT_PIXELS) -> np.ndarray:
+    """Decode an image file's bytes as stored: 8/16-bit or float, grey, BGR or BGRA.
 
-    ``into``: an array to decode into if the image has its shape and type (see
-    :class:`Scratch`); otherwise a new array. Raises :class:`ImageError` for a file that is
-    missing, empty, truncated, damaged or not decodable. EXIF orientation is not applied
-    (pan and tilt describe the sensor, not the display).
+    The header is measured first (:func:`header_size`): an image of more than ``max_pixels``
+    pixels is refused before any pixel memory is allocated. Raises :class:`ImageError` for
+    data that is empty, truncated, damaged or not decodable; what OpenCV returns is checked,
+    never trusted. EXIF orientation is not applied (pan and tilt describe the sensor).
     """
-    name = os.fspath(path)
-    try:
-        _check_complete(name)
-    except OSError as error:
-        raise ImageError(f"cannot read ({error.strerror or error})") from None
-    image = None
+    if not data:
+        raise ImageError("empty file")
+    width, height = check_input_size(header_size(data), max_pixels)
+    _check_complete(data)
     with _codec_messages() as messages:
-        if into is not None:
-            with contextlib.suppress(cv2.error):  # another shape or type: decode afresh
-                image = cv2.imread(name, into, cv2.IMREAD_UNCHANGED)
-        if image is None:
-            try:
-                image = cv2.imread(name, cv2.IMREAD_UNCHANGED)
-            except cv2.error:
-                image = None
+        try:
+            image = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_UNCHANGED)
+        except cv2.error:
+            image = None
     if image is None or image.size == 0:
         reason = f" ({messages[0]})" if messages else ""
-        raise ImageError(f"not an image OpenCV can decode (corrupt or unsupported){reason}")
+        raise ImageError(f"not an image gsrwt can decode (corrupt or unsupported){reason}")
+    if image.shape[:2] != (height, width):
+        raise ImageError(
+            f"its header says {width}x{height} pixels but it decodes as "
+            f"{image.shape[1]}x{image.shape[0]}"
+        )
     damage = [m for m in messages if "Corrupt JPEG" in m or "Premature end" in m]
     if damage:
         raise ImageError(f"corrupt JPEG ({damage[0]})")
     return image
+
+
+def read_image(path: str | Path, max_pixels: float = DEFAULT_MAX_INPUT_PIXELS) -> np.ndarray:
+    """Read and decode an image file (:func:`decode_image`); the path never reaches OpenCV."""
+    return decode_image(read_file_bytes(path), max_pixels)
 
 
 # --------------------------------------------------------------------------------------------
@@ -241,19 +364,17 @@ def warp_image(
 
 
 class Scratch:
-    """One worker's memory for decoding and warping, reused from image to image.
+    """One worker's memory for warping, reused from image to image.
 
-    Fresh memory costs page faults (the warp writes about 40% slower into it), and OpenCV
-    decodes straight into an array of the right shape, where otherwise it briefly holds the
-    image twice. Two regions trade places: a colour image is decoded into region 0, padded
-    to BGRA in region 1 and warped back into region 0, whose decoded pixels are dead by then.
-    A worker so holds about two images' worth of memory. Use :meth:`read`, then :meth:`warp`.
+    Fresh memory costs page faults (the warp writes about 40% slower into it). Each image is
+    decoded into fresh memory (OpenCV cannot decode bytes into a given array); a colour image
+    is padded to BGRA in region 1 and warped into region 0, which persist from image to image.
+    Use :meth:`read`, then :meth:`warp`.
     """
 
     def __init__(self) -> None:
         self._regions: list[np.ndarray] = [np.empty(0, np.uint8), np.empty(0, np.uint8)]
         self._decoded: np.ndarray | None = None
-        self._shape: tuple[tuple[int, ...], np.dtype] | None = None
 
     def array(self, region: int, shape: tuple[int, ...], dtype: np.dtype) -> np.ndarray:
         """An uninitialized array of ``shape`` and ``dtype`` in ``region`` (0 or 1)."""
@@ -264,18 +385,16 @@ class Scratch:
             self._regions[region] = np.empty(nbytes, np.uint8)
         return self._regions[region][:nbytes].view(dtype).reshape(shape)
 
-    def read(self, path: str | Path) -> tuple[tuple[int, ...], np.dtype]:
-        """Decode an image into region 0 (:func:`read_image`); its shape and sample type.
+    def read(
+        self, path: str | Path, max_pixels: float = DEFAULT_MAX_INPUT_PIXELS
+    ) -> tuple[tuple[int, ...], np.dtype]:
+        """Decode an image (:func:`read_image`); its shape and sample type.
 
-        The previous image's shape is the guess; an image of another shape is decoded
-        afresh and its memory becomes region 0.
+        The previous image is dropped first, so a failure never leaves its pixels behind.
         """
         self._decoded = None
-        into = self.array(0, *self._shape) if self._shape is not None else None
-        image = read_image(path, into)
-        if not np.shares_memory(image, self._regions[0]):
-            self._regions[0] = image.reshape(-1).view(np.uint8)
-        self._decoded, self._shape = image, (image.shape, image.dtype)
+        image = read_image(path, max_pixels)
+        self._decoded = image
         return image.shape, image.dtype
 
     @property
@@ -301,11 +420,11 @@ class Scratch:
         if converts:
             padded = self.array(1, (*image.shape[:2], 4), image.dtype)
             source = to_working(image, alpha, padded)
-            del image  # region 0 is free for the output
+            del image  # free the decoded pixels before the warp allocates
         else:
             source = to_working(image, alpha)
         out_shape = (height, width, *source.pixels.shape[2:])
-        out = self.array(0 if converts else 1, out_shape, source.pixels.dtype)
+        out = self.array(0, out_shape, source.pixels.dtype)
         return warp_working(source, output_from_input, size, interpolation, fill, alpha, out)
 
 

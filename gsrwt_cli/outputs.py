@@ -29,7 +29,13 @@ class OutsideOutputError(ValueError):
 
 
 def current_umask() -> int:
-    """The process's umask, read without changing it for longer than the call."""
+    """The process's umask: from ``/proc/self/status`` where Linux gives it (reading it
+    there changes nothing, so threads creating files meanwhile are unaffected), else by
+    setting and restoring it."""
+    with contextlib.suppress(OSError, ValueError), open("/proc/self/status") as status:
+        for line in status:
+            if line.startswith("Umask:"):
+                return int(line.split()[1], 8)
     mask = os.umask(0o022)
     os.umask(mask)
     return mask
@@ -55,22 +61,15 @@ def relative_output(name: str) -> PurePosixPath:
     return PurePosixPath(*parts)
 
 
-def _existing_ancestor(path: Path) -> Path:
-    while not os.path.lexists(path) and path != path.parent:
-        path = path.parent
-    return path
-
-
 def check_inside(root: str | Path, target: str | Path) -> None:
     """Raise :class:`OutsideOutputError` unless ``target``'s directory lies inside ``root``.
 
-    The nearest existing ancestor of ``target``'s directory is resolved (symbolic links
-    followed) and must be ``root``'s real path or below it. The target itself may be a
+    ``target``'s directory is resolved (symbolic links followed, as far as it exists) and
+    must be ``root``'s real path or below it. The target itself may be a
     symbolic link: :func:`open_atomic` replaces the link, never what it points to.
     """
-    real_root = os.path.realpath(root)
-    parent = Path(os.path.abspath(target)).parent
-    real_parent = os.path.realpath(_existing_ancestor(parent))
+    real_root = os.path.realpath(root)  # the parts that do not exist yet are taken as given
+    real_parent = os.path.realpath(Path(os.path.abspath(target)).parent)
     if real_parent != real_root and not real_parent.startswith(real_root.rstrip(os.sep) + os.sep):
         raise OutsideOutputError(
             f"would be written outside the output {root} (through a symbolic link to "
@@ -99,12 +98,15 @@ def open_atomic(
     descriptor, temporary = tempfile.mkstemp(
         dir=path.parent, prefix=f".{path.name}.gsrwt-{os.getpid()}-", suffix=".part"
     )
+    handle = os.fdopen(descriptor, mode, **kwargs)
     try:
-        with os.fdopen(descriptor, mode, **kwargs) as handle:
-            yield handle
+        yield handle
+        handle.close()  # a full disk shows here, when the last buffer is flushed
         os.chmod(temporary, 0o666 & ~current_umask())
         os.replace(temporary, path)
     except BaseException:
+        with contextlib.suppress(OSError):  # the first error is the one to report
+            handle.close()
         with contextlib.suppress(FileNotFoundError):
             os.unlink(temporary)
         raise

@@ -10,6 +10,7 @@ from __future__ import annotations
 import csv
 import json
 import math
+import re
 from collections.abc import Iterable, Mapping, Sequence
 from typing import IO, Any
 
@@ -17,6 +18,7 @@ FORMATS = ("table", "csv", "tsv", "json", "jsonl", "markdown")
 #: Decimal places of floats in the machine formats and in the human ones.
 MACHINE_DECIMALS = 6
 HUMAN_DECIMALS = 3
+_SURROGATE = re.compile("[\ud800-\udfff]")
 
 
 def format_from_extension(path: str) -> str | None:
@@ -74,6 +76,8 @@ class TableWriter:
         elif self.fmt in ("json", "jsonl"):
             record = {c: _json_value(v) for c, v in zip(self.columns, values)}
             text = json.dumps(record, ensure_ascii=False)
+            if _SURROGATE.search(text):  # a file name that is not UTF-8: escape it, so that
+                text = json.dumps(record)  # the JSON stays valid and json.loads gives it back
             if self.fmt == "jsonl":
                 self.stream.write(text + "\n")
             else:
@@ -125,3 +129,23 @@ def write_table(
     writer = TableWriter(stream, columns, fmt)
     writer.write_rows(rows)
     writer.close()
+
+
+def read_table(stream: IO[str], fmt: str) -> list[dict[str, Any]]:
+    """The rows of a table this module wrote in a machine format (csv, tsv, json, jsonl).
+
+    Text formats give every value as a string (empty cells as ``None``), which
+    :class:`TableWriter` writes back unchanged. Raises ``ValueError`` for anything else.
+    """
+    if fmt in ("csv", "tsv"):
+        reader = csv.DictReader(stream, dialect="excel-tab" if fmt == "tsv" else "excel")
+        return [{k: (v if v != "" else None) for k, v in row.items()} for row in reader]
+    if fmt == "json":
+        rows = json.load(stream)
+    elif fmt == "jsonl":
+        rows = [json.loads(line) for line in stream if line.strip()]
+    else:
+        raise ValueError(f"cannot read back a {fmt} table")
+    if not isinstance(rows, list) or not all(isinstance(row, dict) for row in rows):
+        raise ValueError("not a table of rows")
+    return rows

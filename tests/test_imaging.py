@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import os
+import subprocess
+import sys
 
 import cv2
 import numpy as np
@@ -92,3 +94,21 @@ def test_damaged_jpeg_is_an_error_not_a_grey_picture(tmp_path):
     (tmp_path / "t.jpg").write_bytes(data[: len(data) // 2])
     with pytest.raises(ImageError, match="truncated JPEG"):
         read_image(tmp_path / "t.jpg")
+
+
+def test_importing_the_library_changes_no_process_wide_state():
+    """Only the console entry point silences OpenCV; no import touches the umask."""
+    script = (
+        "import os, pkgutil, importlib, cv2\n"
+        "os.umask(0o027)\n"
+        "level = cv2.utils.logging.getLogLevel()\n"
+        "import gsrwt_cli\n"
+        "for module in pkgutil.walk_packages(gsrwt_cli.__path__, 'gsrwt_cli.'):\n"
+        "    if not module.name.endswith('__main__'):\n"
+        "        importlib.import_module(module.name)\n"
+        "assert cv2.utils.logging.getLogLevel() == level, 'OpenCV logging changed'\n"
+        "assert os.umask(0o022) == 0o027, 'umask changed'\n"
+        "print('unchanged')\n"
+    )
+    result = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
+    assert result.stdout.strip() == "unchanged", result.stderr

@@ -131,3 +131,21 @@ def test_python_api_example_runs(capsys, monkeypatch):
     assert printed[0].startswith("(320, 240)")
     delta, shift, gamma = (float(v) for v in printed[-1].split())
     assert (round(delta, 2), round(shift, 2), round(gamma, 2)) == (28.19, 427.46, -24.15)
+
+
+def test_every_guarantee_names_tests_that_exist():
+    """Each row of the Guarantees table names tests (``file.py::name``, or ``::name`` for the
+    file named last) that are defined in that file, so the promise has a test behind it."""
+    section = README.split("## Guarantees", 1)[1].split("\n## ", 1)[0]
+    rows = [line for line in section.splitlines() if line.startswith("| ") and "::" in line]
+    assert len(rows) >= 10
+    for row in rows:
+        held_by = row.rstrip(" |").rsplit(" | ", 1)[1]
+        current = None
+        for file_name, test_name in re.findall(r"`(test_\w+\.py)?::(\w+)`", held_by):
+            current = file_name or current
+            assert current, row
+            source = (ROOT / "tests" / current).read_text()
+            assert re.search(rf"^def {test_name}\(", source, re.M), f"{current}::{test_name}"
+        for whole_file in re.findall(r"`(test_\w+\.py)`", held_by):
+            assert (ROOT / "tests" / whole_file).is_file(), whole_file

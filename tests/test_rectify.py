@@ -175,7 +175,7 @@ def messy(tmp_path):
 
 
 EXPECTED_ERRORS = {
-    "corrupt.jpg": "not an image OpenCV can decode",
+    "corrupt.jpg": "not an image gsrwt can decode",
     "truncated.png": "truncated PNG",
     "empty.jpg": "empty file",
     "noparams.png": "no parameters: not in",

@@ -16,6 +16,7 @@ from ..gaze import (
     track as track_object,
 )
 from ..geometry import gsrwt_parameters
+from ..messages import quote
 from ..sidecar import RecordError, view_from_values
 from ..tables import write_table
 from .options import (
@@ -37,7 +38,7 @@ def _pair(name: str, text: str | None) -> tuple[float, float] | None:
     try:
         first, second = (float(part) for part in text.split(","))
     except ValueError:
-        raise click.BadParameter(f"expected two numbers A,B, got {text!r}",
+        raise click.BadParameter(f"expected two numbers A,B, got {quote(text)}",
                                  param_hint=f"'{name}'") from None
     return first, second
 
@@ -112,7 +113,7 @@ def track(distance: float, height: float, object_position: float, positions: str
     try:
         points = [float(p) for p in positions.split(",") if p.strip()]
     except ValueError:
-        raise click.BadParameter(f"expected numbers separated by commas, got {positions!r}",
+        raise click.BadParameter(f"expected numbers separated by commas, got {quote(positions)}",
                                  param_hint="'--positions'") from None
     rows = []
     for position in points:

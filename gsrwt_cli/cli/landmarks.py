@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import os
 import sys
 from collections.abc import Iterable, Iterator
 from pathlib import Path
@@ -24,18 +25,28 @@ from ..landmarks import (
     hough_lines,
     match_template,
 )
-from ..outputs import write_atomic
+from ..messages import quote
+from ..outputs import OutsideOutputError, write_atomic
 from ..sidecar import SidecarError, load_sidecar
 from ..tables import TableWriter
-from .options import InputError, format_option, resolve_format, view_defaults, view_options
+from .options import (
+    InputError,
+    format_option,
+    make_output_directory,
+    output_target,
+    report_error,
+    resolve_format,
+    view_defaults,
+    view_options,
+)
 
 LINES_COLUMNS = ("image", "rho", "theta_deg", "votes", "x1", "y1", "x2", "y2",
                  "x1_src", "y1_src", "x2_src", "y2_src")
 MATCH_COLUMNS = ("image", "template", "x", "y", "scale", "votes", "score", "x_src", "y_src")
 
 
-def _sources(images: tuple[Path, ...], sidecar: Path | None, view_kwargs: dict[str, Any]):
-    """Canonical views of image files and of the images in directories (checked up front)."""
+def _image_paths(images: tuple[Path, ...]) -> list[Path]:
+    """The image files given and the images in the directories given (checked up front)."""
     paths: list[Path] = []
     for path in images:
         if path.is_dir():
@@ -44,6 +55,11 @@ def _sources(images: tuple[Path, ...], sidecar: Path | None, view_kwargs: dict[s
             paths.append(path)
         else:
             raise InputError(f"{path}: no such file or directory")
+    return paths
+
+
+def _sources(paths: list[Path], sidecar: Path | None, view_kwargs: dict[str, Any]):
+    """Canonical views of ``paths``, with the parameters of ``sidecar`` and the options."""
     try:
         loaded = load_sidecar(sidecar) if sidecar is not None else None
     except SidecarError as error:
@@ -51,16 +67,70 @@ def _sources(images: tuple[Path, ...], sidecar: Path | None, view_kwargs: dict[s
     return canonical_views(paths, loaded, view_defaults(view_kwargs))
 
 
-def _draw_target(draw: Path | None, images: tuple[Path, ...]) -> None:
+class Drawings:
+    """Where ``--draw DIR`` puts the picture of each image: ``DIR/STEM.png``, inside DIR.
+
+    A picture is refused (an error for that image, the others still drawn) when its file
+    would lie outside DIR (a symbolic link in DIR leading out), would replace an input
+    (an image, a template, the sidecar), or would replace the picture of an earlier image of
+    the same run: ``a/door.jpg`` and ``b/door.png`` both draw to ``DIR/door.png``, and the
+    second is refused rather than silently given another name or drawn over the first.
+    """
+
+    def __init__(self, directory: Path, inputs: Iterable[Path]) -> None:
+        self.directory = directory
+        self.protected = {os.path.realpath(path) for path in inputs}
+        self.drawn: dict[str, Path] = {}  # real path of a picture -> the image it shows
+
+    def target(self, image: Path) -> Path:
+        """The picture's file for ``image``, or :class:`ValueError` saying why there is none."""
+        target = self.directory / (image.stem + ".png")
+        try:
+            output_target(self.directory, target.name)
+        except OutsideOutputError as error:
+            raise ValueError(f"its picture {target} {error}") from None
+        real = os.path.realpath(target)
+        if real in self.protected:
+            raise ValueError(f"its picture {target} would overwrite an input")
+        if real in self.drawn:
+            raise ValueError(f"its picture {target} would replace the picture of "
+                             f"{self.drawn[real]} (same name); draw them in separate runs")
+        self.drawn[real] = image
+        return target
+
+    def save(self, target: Path, overlay: np.ndarray) -> None:
+        """Write the picture whole, inside the directory (or raise OSError, ValueError)."""
+        write_atomic(target, encode_image(overlay, ".png"), root=self.directory)
+
+
+def _start_drawings(draw: Path | None, inputs: list[Path]) -> Drawings | None:
     if draw is None:
-        return
-    for image in images:
-        if (draw / image.name).resolve() == image.resolve():
-            raise InputError(f"--draw {draw}: would overwrite the input {image}")
+        return None
+    make_output_directory("--draw", draw)
+    return Drawings(draw, inputs)
 
 
-def _save_overlay(draw: Path, view: CanonicalView, overlay: np.ndarray) -> None:
-    write_atomic(draw / (view.path.stem + ".png"), encode_image(overlay, ".png"))
+def _drawing_target(drawings: Drawings | None, view: CanonicalView) -> Path | None:
+    """The picture's file for ``view``, or None (reported, counted by the caller) if refused."""
+    if drawings is None:
+        return None
+    try:
+        return drawings.target(view.path)
+    except ValueError as error:
+        report_error(f"{view.path}: --draw: {error}")
+        return None
+
+
+def _save_drawing(drawings: Drawings, target: Path, view: CanonicalView,
+                  overlay: np.ndarray) -> bool:
+    """Write one picture; False (and one error line) when it could not be written."""
+    try:
+        drawings.save(target, overlay)
+    except (OSError, ValueError, ImageError) as error:
+        reason = getattr(error, "strerror", None) or error
+        report_error(f"{view.path}: --draw {target}: {reason}")
+        return False
+    return True
 
 
 def _colour(pixels: np.ndarray) -> np.ndarray:
@@ -83,7 +153,7 @@ def _readable(
     for view in views:
         if isinstance(view, tuple):
             failures.append(view[0])
-            click.echo(f"Error: {view[0]}: {view[1]}", err=True)
+            report_error(f"{view[0]}: {view[1]}")
         else:
             yield view
 
@@ -116,14 +186,18 @@ def lines(images: tuple[Path, ...], sidecar: Path | None, edge_threshold: float,
     Example:
       gsrwt lines sample_data/views/corridor_p30_t15.png --sidecar sample_data/views/views.csv
     """
-    _draw_target(draw, images)
-    views = _sources(images, sidecar, view_kwargs)
+    paths = _image_paths(images)
+    views = _sources(paths, sidecar, view_kwargs)
+    drawings = _start_drawings(draw, [*paths, *([sidecar] if sidecar else [])])
     writer = TableWriter(sys.stdout, LINES_COLUMNS, resolve_format(fmt))
     failures: list[Path] = []
     for view in _readable(views, failures):
+        picture = _drawing_target(drawings, view)
+        if drawings is not None and picture is None:
+            failures.append(view.path)
         found = hough_lines(_grey8(view.pixels), edge_threshold=edge_threshold,
                             theta_step_deg=theta_step, min_votes=min_votes)
-        overlay = _colour(view.pixels) if draw is not None else None
+        overlay = _colour(view.pixels) if picture is not None else None
         for line in found:
             row = {"image": str(view.path), "rho": line.rho, "theta_deg": line.theta_deg,
                    "votes": line.votes, "x1": line.x1, "y1": line.y1, "x2": line.x2,
@@ -136,8 +210,8 @@ def lines(images: tuple[Path, ...], sidecar: Path | None, edge_threshold: float,
             if overlay is not None:
                 ends = np.round([[line.x1, line.y1], [line.x2, line.y2]]).astype(int)
                 cv2.line(overlay, tuple(ends[0]), tuple(ends[1]), (0, 0, 255), 2, cv2.LINE_AA)
-        if overlay is not None:
-            _save_overlay(draw, view, overlay)
+        if picture is not None and not _save_drawing(drawings, picture, view, overlay):
+            failures.append(view.path)
     writer.close()
     if failures:
         sys.exit(1)
@@ -147,10 +221,10 @@ def _parse_scales(text: str, steps: int) -> list[float]:
     try:
         low, high = (float(v) for v in text.split(","))
     except ValueError:
-        raise click.BadParameter(f"expected MIN,MAX, got {text!r}",
+        raise click.BadParameter(f"expected MIN,MAX, got {quote(text)}",
                                  param_hint="'--scales'") from None
     if not (0 < low <= high and math.isfinite(high)):
-        raise click.BadParameter(f"expected 0 < MIN <= MAX, got {text!r}",
+        raise click.BadParameter(f"expected 0 < MIN <= MAX, got {quote(text)}",
                                  param_hint="'--scales'")
     return list(np.linspace(low, high, steps)) if high > low else [low]
 
@@ -190,10 +264,10 @@ def match(images: tuple[Path, ...], templates: tuple[Path, ...], sidecar: Path |
 
     \b
     Example:
-      gsrwt match sample_data/views/door_p20_t-8_f800.jpg --template knob.png \\
+      gsrwt match sample_data/views/door_p20_t-8_f800.jpg \\
+          --template sample_data/templates/knob.png \\
           --sidecar sample_data/views/views.csv
     """
-    _draw_target(draw, images)
     scale_list = _parse_scales(scales, scale_steps)
     models: list[tuple[Path, Template]] = []
     for path in templates:
@@ -202,12 +276,17 @@ def match(images: tuple[Path, ...], templates: tuple[Path, ...], sidecar: Path |
                                                 edge_threshold=edge_threshold)))
         except (ImageError, ValueError) as error:
             raise InputError(f"--template {path}: {error}") from None
-    views = _sources(images, sidecar, view_kwargs)
+    paths = _image_paths(images)
+    views = _sources(paths, sidecar, view_kwargs)
+    drawings = _start_drawings(draw, [*paths, *templates, *([sidecar] if sidecar else [])])
     writer = TableWriter(sys.stdout, MATCH_COLUMNS, resolve_format(fmt))
     failures: list[Path] = []
     for view in _readable(views, failures):
+        picture = _drawing_target(drawings, view)
+        if drawings is not None and picture is None:
+            failures.append(view.path)
         grey = _grey8(view.pixels)
-        overlay = _colour(view.pixels) if draw is not None else None
+        overlay = _colour(view.pixels) if picture is not None else None
         for path, model in models:
             found = match_template(grey, model, scales=scale_list, edge_threshold=edge_threshold,
                                    min_score=min_score, max_matches=max_matches)
@@ -223,8 +302,8 @@ def match(images: tuple[Path, ...], templates: tuple[Path, ...], sidecar: Path |
                     corner0 = np.round([item.x, item.y] - half).astype(int)
                     corner1 = np.round([item.x, item.y] + half).astype(int)
                     cv2.rectangle(overlay, tuple(corner0), tuple(corner1), (0, 0, 255), 2)
-        if overlay is not None:
-            _save_overlay(draw, view, overlay)
+        if picture is not None and not _save_drawing(drawings, picture, view, overlay):
+            failures.append(view.path)
     writer.close()
     if failures:
         sys.exit(1)

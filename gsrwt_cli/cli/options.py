@@ -2,12 +2,16 @@
 
 from __future__ import annotations
 
+import os
 import sys
 from collections.abc import Callable
+from pathlib import Path, PurePosixPath
 from typing import Any, TypeVar
 
 import click
 
+from ..messages import one_line
+from ..outputs import OutsideOutputError, check_inside
 from ..sidecar import RecordError
 from ..tables import FORMATS
 
@@ -18,6 +22,52 @@ class InputError(click.ClickException):
     """Bad input from the user (file, row, option): one line on stderr, exit code 2."""
 
     exit_code = 2
+
+    def __init__(self, message: str) -> None:
+        super().__init__(one_line(message))
+
+
+def report_error(message: str) -> None:
+    """One ``Error: ...`` line on stderr: control characters escaped, length bounded."""
+    click.echo("Error: " + one_line(message), err=True)
+
+
+def _is_inside(real_root: str, real_path: str) -> bool:
+    return real_path == real_root or real_path.startswith(real_root.rstrip(os.sep) + os.sep)
+
+
+def output_target(root: Path, relative: PurePosixPath | str) -> Path:
+    """``root / relative``, a file a command may write, checked against the output rule.
+
+    ``relative`` must already be a checked relative name
+    (:func:`~gsrwt_cli.outputs.relative_output`, or a plain file name). Raises
+    :class:`~gsrwt_cli.outputs.OutsideOutputError` when writing there would leave ``root``:
+    a directory on the way is a symbolic link leading out of it, or the file itself is a
+    symbolic link to a file outside it (which we refuse rather than silently replace the link).
+    ``root`` should exist: nothing inside a missing directory can be a link.
+    """
+    target = root / relative
+    if not os.path.lexists(root):
+        return target
+    check_inside(root, target)
+    if os.path.islink(target):
+        pointed_to = os.path.realpath(target)
+        if not _is_inside(os.path.realpath(root), pointed_to):
+            raise OutsideOutputError(
+                f"is a symbolic link to {pointed_to}, outside the output {root}"
+            )
+    return target
+
+
+def make_output_directory(option: str, directory: Path) -> None:
+    """Create the output directory the user named, or stop with one line saying why not."""
+    if directory.exists() and not directory.is_dir():
+        raise InputError(f"{option} {directory}: exists and is not a directory")
+    try:
+        directory.mkdir(parents=True, exist_ok=True)
+    except OSError as error:
+        raise InputError(f"{option} {directory}: cannot create it "
+                         f"({error.strerror or error})") from None
 
 
 def format_option(func: F) -> F:

@@ -15,6 +15,7 @@ from .options import (
     InputError,
     format_option,
     option_message,
+    report_error,
     resolve_format,
     view_defaults,
     view_options,
@@ -37,7 +38,7 @@ def params(sidecar: Path | None, fmt: str | None, **kwargs: Any) -> None:
     \b
     Examples:
       gsrwt params --pan 15 --tilt 30 --focal 280 --width 320 --height 240
-      gsrwt params --sidecar views.csv --format json
+      gsrwt params --sidecar sample_data/views/views.csv --format json
     """
     defaults = view_defaults(kwargs)
     rows = []
@@ -60,6 +61,6 @@ def params(sidecar: Path | None, fmt: str | None, **kwargs: Any) -> None:
                 errors.append(str(error))
         if errors:
             for message in errors[:-1]:
-                click.echo(f"Error: {message}", err=True)
+                report_error(message)
             raise InputError(errors[-1])
     write_table(sys.stdout, PARAMS_COLUMNS, rows, resolve_format(fmt))

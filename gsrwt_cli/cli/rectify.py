@@ -3,9 +3,12 @@
 from __future__ import annotations
 
 import contextlib
+import csv
 import math
 import os
+import signal
 import sys
+import tempfile
 from collections.abc import Iterator
 from pathlib import Path, PurePosixPath
 from typing import IO, Any
@@ -13,15 +16,16 @@ from typing import IO, Any
 import click
 from tqdm import tqdm
 
-from .. import cli as cli_package
 from ..batch import (
     RECTIFY_COLUMNS,
+    Counts,
     Settings,
     Source,
     plan_jobs,
     run_batch,
     source_from_listed_path,
     sources_from_directory,
+    worker_context,
 )
 from ..imaging import (
     INTERPOLATIONS,
@@ -29,9 +33,10 @@ from ..imaging import (
     canonical_extension,
     check_writable,
 )
-from ..outputs import open_atomic
+from ..messages import one_line, quote
+from ..outputs import open_atomic, remove_stale_temporaries
 from ..sidecar import SidecarError, load_sidecar
-from ..tables import TableWriter, format_from_extension
+from ..tables import TableWriter, format_from_extension, read_table
 from .options import InputError, view_defaults, view_options
 
 
@@ -46,7 +51,7 @@ def parse_bbox(text: str) -> str | tuple[float, float, float, float]:
         box = ()
     if len(box) != 4 or not all(math.isfinite(v) for v in box):
         raise click.BadParameter(
-            f"expected frontal, full or X0,Y0,X1,Y1 (four numbers), got {text!r}",
+            f"expected frontal, full or X0,Y0,X1,Y1 (four numbers), got {quote(text)}",
             param_hint="'--bbox'",
         )
     if box[2] <= box[0] or box[3] <= box[1]:
@@ -55,7 +60,7 @@ def parse_bbox(text: str) -> str | tuple[float, float, float, float]:
     return box  # type: ignore[return-value]
 
 
-def parse_pixel_count(text: str) -> float:
+def parse_pixel_count(text: str, option: str) -> float:
     """``50M``, ``2.5e6`` or ``800K`` pixels."""
     factor = {"k": 1e3, "m": 1e6, "g": 1e9}.get(text[-1:].lower(), 1.0)
     number = text[:-1] if factor != 1.0 else text
@@ -64,8 +69,8 @@ def parse_pixel_count(text: str) -> float:
     except ValueError:
         value = math.nan
     if not math.isfinite(value) or value < 1:
-        raise click.BadParameter(f"expected a pixel count such as 50M, got {text!r}",
-                                 param_hint="'--max-pixels'")
+        raise click.BadParameter(f"expected a pixel count such as 50M, got {quote(text)}",
+                                 param_hint=f"'{option}'")
     return value
 
 
@@ -75,22 +80,32 @@ def positive(name: str, value: float | None) -> None:
                                  param_hint=f"'{name}'")
 
 
-def collect_sources(inputs: tuple[str, ...], recursive: bool) -> list[Source]:
-    """Image files, directories and ``-`` (paths on standard input) to sources."""
+def collect_sources(inputs: tuple[str, ...], recursive: bool) -> tuple[list[Source], list[str]]:
+    """Image files, directories and ``-`` (paths on standard input) to sources.
+
+    Paths on standard input are read as bytes and decoded as the file system does, so a
+    name that is not UTF-8 still names its file. Returns the sources and the problems met in
+    subdirectories (with ``-r``); a missing or unreadable INPUT is an :class:`InputError`.
+    """
     sources: list[Source] = []
+    unreadable: list[str] = []
     for text in inputs:
         if text == "-":
-            lines = click.get_text_stream("stdin").read().splitlines()
-            sources += [source_from_listed_path(line.strip()) for line in lines if line.strip()]
+            data = click.get_binary_stream("stdin").read()
+            names = [os.fsdecode(line.strip()) for line in data.split(b"\n")]
+            sources += [source_from_listed_path(name) for name in names if name]
             continue
         path = Path(text)
         if path.is_dir():
-            sources += sources_from_directory(path, recursive)
+            try:
+                sources += sources_from_directory(path, recursive, unreadable)
+            except OSError as error:
+                raise InputError(f"{text}: cannot read directory ({error.strerror})") from None
         elif path.exists():
             sources.append(Source(path, PurePosixPath(path.name)))
         else:
             raise InputError(f"{text}: no such file or directory")
-    return sources
+    return sources, unreadable
 
 
 def refuse_unsafe_outputs(
@@ -123,14 +138,86 @@ def refuse_unsafe_outputs(
             raise InputError(f"--table {table}: would overwrite an input; choose another path")
 
 
+def prepare_directory(directory: Path, what: str) -> None:
+    """Make ``directory`` and prove it writable (a temporary file), or raise InputError."""
+    blocker = next((p for p in [directory, *directory.parents] if p.exists()), None)
+    if blocker is not None and not blocker.is_dir():
+        raise InputError(f"{what}: cannot write there ({blocker} is not a directory)")
+    try:
+        directory.mkdir(parents=True, exist_ok=True)
+        descriptor, probe = tempfile.mkstemp(
+            dir=directory, prefix=f".gsrwt-probe.gsrwt-{os.getpid()}-", suffix=".part"
+        )
+        os.close(descriptor)
+        os.unlink(probe)
+    except OSError as error:
+        reason = error.strerror or str(error)
+        raise InputError(f"{what}: cannot write there ({reason})") from None
+
+
+def previous_rows(path: str, fmt: str) -> dict[tuple[str, str], dict[str, Any]]:
+    """The last run's table at ``path``, by ``(image, output)``; empty if there is none."""
+    try:
+        with open(path, encoding="utf-8", errors="surrogateescape", newline="") as stream:
+            rows = read_table(stream, fmt)
+    except (OSError, ValueError, csv.Error):
+        return {}
+    return {
+        (str(row.get("image")), str(row.get("output"))): row
+        for row in rows if row.get("image") is not None and row.get("output") is not None
+    }
+
+
+class TableWriteError(Exception):
+    """The table could not be written (a full disk, say): the run cannot keep its record."""
+
+
+class Terminated(BaseException):
+    """SIGTERM, raised in the main process like KeyboardInterrupt is for SIGINT."""
+
+
+@contextlib.contextmanager
+def stop_on_signals() -> Iterator[None]:
+    """SIGINT raises KeyboardInterrupt and SIGTERM raises :class:`Terminated`, once.
+
+    After the first, both are ignored until the block ends, so that the table of what
+    finished is written whole even if the user presses Ctrl-C again.
+    """
+
+    def stop(signum: int, frame: object) -> None:
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+        signal.signal(signal.SIGTERM, signal.SIG_IGN)
+        raise KeyboardInterrupt if signum == signal.SIGINT else Terminated
+
+    saved = {number: signal.getsignal(number) for number in (signal.SIGINT, signal.SIGTERM)}
+    for number in saved:
+        signal.signal(number, stop)
+    try:
+        yield
+    finally:
+        for number, handler in saved.items():
+            signal.signal(number, handler)
+
+
 @contextlib.contextmanager
 def open_table(path: str) -> Iterator[IO[str]]:
-    """The table's stream: stdout for ``-``, else a file that appears whole at the end."""
+    """The table's stream: stdout for ``-``, else a file that appears whole at the end.
+
+    File names that are not UTF-8 are written as their own bytes (``surrogateescape``).
+    """
     if path == "-":
         yield sys.stdout
-    else:
-        with open_atomic(path, "w", encoding="utf-8", newline="") as stream:
+        return
+    finished = False
+    try:
+        with open_atomic(path, "w", encoding="utf-8", errors="surrogateescape",
+                         newline="") as stream:
             yield stream
+            finished = True
+    except OSError as error:
+        if not finished:
+            raise
+        raise TableWriteError(error.strerror or str(error)) from None  # flushing at the end
 
 
 @click.command()
@@ -154,6 +241,8 @@ def open_table(path: str) -> Iterator[IO[str]]:
               help="Metric output: pixels per unit of the image's 'distance'.")
 @click.option("--max-pixels", default="50M", show_default=True,
               help="Refuse an output image larger than this (e.g. 50M, 2e7).")
+@click.option("--max-input-pixels", default="300M", show_default=True,
+              help="Refuse, before decoding it, an input whose header claims more pixels.")
 @click.option("--interpolation", type=click.Choice(tuple(INTERPOLATIONS)), default="linear",
               show_default=True)
 @click.option("--fill", type=float, default=0.0, show_default=True,
@@ -177,7 +266,7 @@ def rectify(
     max_stretch: float, scale: float | None, px_per_unit: float | None, max_pixels: str,
     interpolation: str, fill: float, alpha: bool, ext: str | None, quality: int,
     table_path: str | None, jobs: int | None, overwrite: bool, dry_run: bool, quiet: bool,
-    **view_kwargs: Any,
+    max_input_pixels: str, **view_kwargs: Any,
 ) -> None:
     """Rectify images into canonical frontal views of the wall they show (GS-RWT).
 
@@ -188,9 +277,11 @@ def rectify(
 
     \b
     Examples:
-      gsrwt rectify sample_data --sidecar sample_data/views.csv -o rectified
-      find . -name '*.jpg' | gsrwt rectify - --pan 15 --tilt 30 --focal 2800 -o out
+      gsrwt rectify sample_data/views --sidecar sample_data/views/views.csv -o rectified
+      find sample_data/views -name '*.jpg' | gsrwt rectify - \\
+          --sidecar sample_data/views/views.csv -o from-stdin
     """
+    fork_workers = getattr(click.get_current_context().find_root().obj, "fork_workers", False)
     box = parse_bbox(bbox)
     positive("--max-stretch", max_stretch)
     positive("--scale", scale)
@@ -199,7 +290,8 @@ def rectify(
         raise click.UsageError("use either --scale or --px-per-unit, not both")
     if not math.isfinite(fill):
         raise click.BadParameter(f"must be a finite number, got {fill}", param_hint="'--fill'")
-    pixel_limit = parse_pixel_count(max_pixels)
+    pixel_limit = parse_pixel_count(max_pixels, "--max-pixels")
+    input_pixel_limit = parse_pixel_count(max_input_pixels, "--max-input-pixels")
     extension = None
     if ext is not None:
         extension = canonical_extension(ext)
@@ -224,48 +316,75 @@ def rectify(
             loaded = load_sidecar(sidecar)
         except SidecarError as error:
             raise InputError(str(error)) from None
-    sources = collect_sources(inputs, recursive)
-    if not sources:
+    sources, unreadable = collect_sources(inputs, recursive)
+    if not sources and not unreadable:
         raise InputError(f"no images found in {' '.join(inputs)}")
     job_list = plan_jobs(sources, outdir, loaded, view_defaults(view_kwargs), extension)
     refuse_unsafe_outputs(
         inputs, sources, [job.output for job in job_list], outdir, recursive,
         None if table_path == "-" else Path(table_path), sidecar,
     )
+    if not dry_run:
+        prepare_directory(outdir, f"-o {outdir}")
+    if table_path != "-":
+        prepare_directory(Path(table_path).parent, f"--table {table_path}")
+    for directory in sorted({job.output.parent for job in job_list} | {outdir}):
+        remove_stale_temporaries(directory)
+    previous = previous_rows(table_path, table_format) if table_path != "-" else {}
 
     settings = Settings(
         bbox=box, scale=scale or 1.0, px_per_unit=px_per_unit, max_stretch=max_stretch,
         max_pixels=pixel_limit, interpolation=interpolation, fill=fill, alpha=alpha,
         quality=quality, overwrite=overwrite, dry_run=dry_run,
+        max_input_pixels=input_pixel_limit, root=outdir,
     )
     processes = jobs or os.cpu_count() or 1
-    if not dry_run:
-        outdir.mkdir(parents=True, exist_ok=True)
     tqdm.monitor_interval = 0  # no monitor thread: workers may fork from this process
     progress = tqdm(
         total=len(job_list), unit="img", file=sys.stderr, dynamic_ncols=True,
         disable=quiet or not sys.stderr.isatty(),
     )
-    with open_table(table_path) as stream:
-        writer = TableWriter(stream, RECTIFY_COLUMNS, table_format)
+    for problem in unreadable:
+        progress.write(f"Error: {one_line(problem)}", file=sys.stderr)
+    counts = Counts(failed=len(unreadable))
+    stopped: BaseException | None = None
+    try:
+        with stop_on_signals(), open_table(table_path) as stream:
+            writer = TableWriter(stream, RECTIFY_COLUMNS, table_format)
 
-        def on_row(row: dict[str, Any]) -> None:
-            writer.write_row(row)
-            if row["status"] == "error":
-                progress.write(f"Error: {row['image']}: {row['error']}", file=sys.stderr)
-            progress.update(1)
+            def on_row(row: dict[str, Any]) -> None:
+                try:
+                    writer.write_row(row)
+                except OSError as error:
+                    if table_path == "-":
+                        raise
+                    raise TableWriteError(error.strerror or str(error)) from None
+                counts.add(row)
+                if row["status"] == "error":
+                    progress.write(f"Error: {one_line(row['image'])}: {row['error']}",
+                                   file=sys.stderr)
 
-        try:
-            counts = run_batch(job_list, settings, processes, on_row,
-                               fork_from_caller=cli_package.started_as_command)
-        finally:
-            writer.close()
-            progress.close()
+            try:
+                run_batch(job_list, settings, processes, on_row,
+                          on_progress=lambda: progress.update(1), previous=previous,
+                          context=worker_context(fork_workers))
+            except (KeyboardInterrupt, Terminated) as stop:
+                stopped = stop  # every job has its row: the table is still written whole
+            try:
+                writer.close()
+            except OSError as error:
+                raise TableWriteError(error.strerror or str(error)) from None
+    except TableWriteError as error:
+        raise InputError(f"--table {table_path}: cannot write the table ({error})") from None
+    finally:
+        progress.close()
     if not quiet:
         where = "" if table_path == "-" else f"; table: {table_path}"
-        click.echo(
-            f"gsrwt: {counts.ok} ok, {counts.skipped} skipped, {counts.failed} failed{where}",
-            err=True,
-        )
+        summary = f"{counts.ok} ok, {counts.skipped} skipped, {counts.failed} failed"
+        if stopped is not None:
+            summary = f"interrupted: {summary}, {counts.interrupted} not done"
+        click.echo(f"gsrwt: {summary}{where}", err=True)
+    if stopped is not None:
+        sys.exit(143 if isinstance(stopped, Terminated) else 130)
     if counts.failed:
         sys.exit(1)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import sys
 from pathlib import Path
 from typing import Any
@@ -15,10 +16,22 @@ from ..imaging import (
     encode_image,
     read_image,
 )
-from ..outputs import write_atomic
+from ..messages import escape_controls, quote, shorten
+from ..outputs import OutsideOutputError, relative_output, write_atomic
 from ..render import render_view
 from ..sidecar import RecordError, SidecarError, format_sidecar, load_sidecar, view_from_values
-from .options import InputError, option_message, view_defaults, view_options
+from .options import (
+    InputError,
+    make_output_directory,
+    option_message,
+    output_target,
+    report_error,
+    view_defaults,
+    view_options,
+)
+
+#: Characters of a sidecar row's description (``views.yaml record 'NAME'``) in a message.
+WHERE_LIMIT = 160
 
 
 @click.command()
@@ -55,7 +68,8 @@ def render(
     Examples:
       gsrwt render sample_data/corridor_wall.png --pan 15 --tilt 30 --focal 280 \\
           --width 320 --height 240 -o view.png
-      gsrwt render wall.png --sidecar views.csv -o rendered/
+      gsrwt render sample_data/corridor_wall.png --sidecar sample_data/views/views.csv \\
+          -o rendered
     """
     try:
         pixels = read_image(texture)
@@ -64,6 +78,7 @@ def render(
     defaults = view_defaults(view_kwargs)
     defaults.setdefault("width", pixels.shape[1])
     defaults.setdefault("height", pixels.shape[0])
+    errors: list[str] = []
     if sidecar is None:
         if output.is_dir():
             raise InputError(f"-o {output}: is a directory; give an image file name")
@@ -72,39 +87,46 @@ def render(
         except RecordError as error:
             raise InputError(option_message(error)) from None
         table_path = out_sidecar or output.with_suffix(".yaml")
-        errors: list[str] = []
+        root = None  # a file the user named: written where they said
     else:
         try:
             records = load_sidecar(sidecar).records
         except SidecarError as error:
             raise InputError(str(error)) from None
-        views, errors = [], []
+        if output.exists() and not output.is_dir():
+            raise InputError(f"-o {output}: exists and is not a directory")
+        table_path = out_sidecar or output / "views.csv"
+        views = []
+        claimed: dict[str, str] = {os.path.realpath(table_path): "the views' sidecar"}
         for record in records:
             try:
-                views.append((record.image, record.view(defaults), output / record.image))
+                target = sidecar_target(output, record.image, claimed, record.where)
+                views.append((record.image, record.view(defaults), target))
             except RecordError as error:
                 errors.append(str(error))
-        table_path = out_sidecar or output / "views.csv"
-    targets = [target for _, _, target in views]
-    protected = {texture.resolve()} | ({sidecar.resolve()} if sidecar else set())
-    for target in [*targets, table_path]:
-        if target.resolve() in protected:
-            raise InputError(f"{target}: would overwrite an input; choose another output")
-        if target.exists() and not overwrite:
-            raise InputError(f"{target}: exists; use --overwrite to replace it")
+        root = output
+    protected = {os.path.realpath(texture)} | ({os.path.realpath(sidecar)} if sidecar else set())
     for message in errors:
-        click.echo(f"Error: {message}", err=True)
+        report_error(message)
+    for target in [*(target for _, _, target in views), table_path]:
+        if os.path.realpath(target) in protected:
+            raise InputError(f"{target}: would overwrite an input; choose another output")
+        if os.path.lexists(target) and not overwrite:
+            raise InputError(f"{target}: exists; use --overwrite to replace it")
+    if root is not None and views:
+        make_output_directory("-o", root)  # before the first write: the rule needs the root
     rows = []
+    channels = 4 if alpha else (1 if pixels.ndim == 2 else pixels.shape[2])
     for name, view, target in views:
         try:
-            channels = 4 if alpha else (1 if pixels.ndim == 2 else pixels.shape[2])
             check_writable(target.suffix, pixels.dtype, channels)
             image = render_view(pixels, view, interpolation=interpolation, fill=fill,
                                 alpha=alpha)
-            write_atomic(target, encode_image(image, target.suffix, quality))
+            write_atomic(target, encode_image(image, target.suffix, quality), root=root)
         except (ImageError, ValueError, OSError) as error:
-            errors.append(f"{target}: {error}")
-            click.echo(f"Error: {target}: {error}", err=True)
+            reason = getattr(error, "strerror", None) or error
+            errors.append(f"{target}: {reason}")
+            report_error(f"{target}: {reason}")
             continue
         rows.append(
             {"image": name, "pan": view.pan, "tilt": view.tilt, "focal": view.focal,
@@ -116,6 +138,32 @@ def render(
             text = format_sidecar(table_path, rows)
         except SidecarError as error:
             raise InputError(str(error)) from None
-        write_atomic(table_path, text.encode("utf-8"))
+        try:
+            write_atomic(table_path, text.encode("utf-8"))
+        except OSError as error:
+            raise InputError(f"--out-sidecar {table_path}: cannot write it "
+                             f"({error.strerror or error})") from None
     if errors:
         sys.exit(1)
+
+
+def sidecar_target(output: Path, image: str, claimed: dict[str, str], where: str) -> Path:
+    """Where the sidecar row ``image`` is rendered: inside ``output``, or a :class:`RecordError`.
+
+    The name must be relative, without ``..``, lead through no symbolic link out of
+    ``output`` (:func:`~.options.output_target`), and not be the file of an earlier row or
+    of the views' sidecar: ``claimed`` maps the real paths taken so far to what took them.
+    """
+    where = shorten(escape_controls(where), WHERE_LIMIT)  # a YAML key may be any length
+    try:
+        target = output_target(output, relative_output(image))
+    except OutsideOutputError as error:
+        reason = str(error)
+        verb = "is " if reason.startswith("not ") else ""
+        raise RecordError(where, "image", f"{quote(image)} {verb}{reason}") from None
+    real = os.path.realpath(target)
+    if real in claimed:
+        raise RecordError(where, "image",
+                          f"{quote(image)} is the same file as {claimed[real]}; give another name")
+    claimed[real] = where
+    return target

@@ -1,0 +1,198 @@
+"""Run one function over many items in worker processes that may die, and stop cleanly.
+
+:class:`ProcessExecutor` hands items to workers one at a time over a pipe each and watches
+every worker's process sentinel, so that:
+
+- a worker that dies (kill -9, the OOM killer, a crash in a codec) costs only the item it was
+  working on, which is reported through ``on_death``; a fresh worker takes its place;
+- a parent that dies takes its workers with it: a worker exits quietly when its pipe closes,
+  and on Linux the kernel sends it SIGTERM when its parent goes (``PR_SET_PDEATHSIG``);
+- stopping (an exception in the caller: Ctrl-C, SIGTERM, a closed pipe) ends every worker
+  with SIGTERM, which unwinds its work (temporary files are removed on the way out), then
+  SIGKILL for any that does not end within a grace period; ``on_abandon`` is told which items
+  were in flight, and in which process, so the caller can clean up after them.
+
+Workers ignore SIGINT: Ctrl-C reaches the whole process group, and only the parent decides.
+Results arrive as ``(index, result)`` in completion order.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import ctypes
+import multiprocessing
+import signal
+import sys
+from collections import deque
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import dataclass
+from multiprocessing.connection import Connection, wait
+from typing import Any, Generic, TypeVar
+
+Item = TypeVar("Item")
+Result = TypeVar("Result")
+
+#: Seconds a worker is given to end after SIGTERM before it is killed.
+STOP_GRACE_SECONDS = 5.0
+
+
+def death_reason(exitcode: int | None) -> str:
+    """``worker died: signal 9 (SIGKILL)`` or ``worker died: exit code 3``."""
+    if exitcode is not None and exitcode < 0:
+        try:
+            name = f" ({signal.Signals(-exitcode).name})"
+        except ValueError:
+            name = ""
+        return f"worker died: signal {-exitcode}{name}"
+    return f"worker died: exit code {exitcode}"
+
+
+def _die_with_parent() -> None:
+    """Ask Linux to send this process SIGTERM when its parent ends (no-op elsewhere)."""
+    if not sys.platform.startswith("linux"):
+        return
+    with contextlib.suppress(OSError, AttributeError):
+        libc = ctypes.CDLL(None, use_errno=True)
+        pr_set_pdeathsig = 1
+        libc.prctl(pr_set_pdeathsig, signal.SIGTERM, 0, 0, 0)
+
+
+def _on_sigterm(signum: int, frame: object) -> None:
+    raise SystemExit(128 + signum)
+
+
+def _worker_main(
+    connection: Connection, make_worker: Callable[..., Callable[[Any], Any]], args: tuple
+) -> None:
+    """A worker's life: take an item, send its result, until told to stop or orphaned."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, _on_sigterm)
+    signal.signal(signal.SIGPIPE, signal.SIG_DFL)
+    _die_with_parent()
+    try:
+        work = make_worker(*args)
+        while True:
+            item = connection.recv()
+            if item is None:
+                return
+            connection.send(work(item))
+    except (EOFError, BrokenPipeError, ConnectionResetError, SystemExit):
+        # The parent is gone or stopped us: leave quietly (no traceback on a dead stderr).
+        return
+    finally:
+        with contextlib.suppress(OSError):
+            sys.stderr.flush()
+
+
+@dataclass
+class _Worker:
+    process: multiprocessing.process.BaseProcess
+    connection: Connection
+    busy_with: int | None = None  # the index of the item in flight
+
+
+class ProcessExecutor(Generic[Item, Result]):
+    """``processes`` workers running over items, surviving the death of workers.
+
+    Each worker process calls ``make_worker(*args)`` once, and the callable it returns once per
+    item (so per-worker state, such as reusable memory, lives in that callable, not in module
+    globals). ``on_death(item, reason)`` makes the result of an item whose worker died;
+    ``on_abandon(item, pid)`` is called, in the parent, for an item whose worker was stopped
+    or died while working on it (its process ``pid``). Items, results, ``make_worker`` and
+    ``args`` must be picklable.
+    """
+
+    def __init__(
+        self,
+        make_worker: Callable[..., Callable[[Item], Result]],
+        args: tuple,
+        processes: int,
+        *,
+        on_death: Callable[[Item, str], Result],
+        on_abandon: Callable[[Item, int], None] | None = None,
+        context: multiprocessing.context.BaseContext | None = None,
+    ) -> None:
+        self.make_worker = make_worker
+        self.args = args
+        self.processes = max(1, processes)
+        self.on_death = on_death
+        self.on_abandon = on_abandon
+        self.context = context or multiprocessing.get_context()
+        self.deaths = 0
+
+    def _start(self) -> _Worker:
+        parent_end, child_end = self.context.Pipe(duplex=True)
+        process = self.context.Process(
+            target=_worker_main,
+            args=(child_end, self.make_worker, self.args),
+            daemon=True,
+        )
+        process.start()
+        child_end.close()
+        return _Worker(process, parent_end)
+
+    def map_unordered(self, items: Sequence[Item]) -> Iterator[tuple[int, Result]]:
+        """``(index, result)`` for every item, as they complete."""
+        queue = deque(range(len(items)))
+        workers: list[_Worker] = []
+
+        def dispatch(worker: _Worker) -> None:
+            worker.busy_with = queue.popleft() if queue else None
+            if worker.busy_with is not None:
+                # A worker that died since its last result breaks the pipe: its sentinel
+                # then reports the death, and the item is reported with it.
+                with contextlib.suppress(OSError):
+                    worker.connection.send(items[worker.busy_with])
+
+        try:
+            for _ in range(min(self.processes, len(items))):
+                workers.append(self._start())
+                dispatch(workers[-1])
+            while any(worker.busy_with is not None for worker in workers):
+                busy = [worker for worker in workers if worker.busy_with is not None]
+                ready = set(wait([w.connection for w in busy] + [w.process.sentinel for w in busy]))
+                for worker in busy:
+                    index = worker.busy_with
+                    assert index is not None
+                    if worker.connection in ready or worker.connection.poll():
+                        try:
+                            result = worker.connection.recv()
+                        except (EOFError, OSError):
+                            result = None
+                        else:
+                            dispatch(worker)
+                            yield index, result
+                            continue
+                    if worker.connection in ready or worker.process.sentinel in ready:
+                        # No result, and the process ended (or its pipe broke): it died.
+                        worker.process.join(STOP_GRACE_SECONDS)
+                        reason = death_reason(worker.process.exitcode)
+                        self.deaths += 1
+                        if self.on_abandon is not None and worker.process.pid is not None:
+                            self.on_abandon(items[index], worker.process.pid)
+                        worker.connection.close()
+                        workers.remove(worker)
+                        yield index, self.on_death(items[index], reason)
+                        if queue:
+                            workers.append(self._start())
+                            dispatch(workers[-1])
+        finally:
+            self._stop(workers, items)
+
+    def _stop(self, workers: list[_Worker], items: Sequence[Item]) -> None:
+        """End every worker: politely if idle, with SIGTERM (then SIGKILL) if busy."""
+        for worker in workers:
+            if worker.busy_with is None:
+                with contextlib.suppress(OSError):
+                    worker.connection.send(None)
+            elif worker.process.is_alive():
+                worker.process.terminate()
+        for worker in workers:
+            worker.process.join(STOP_GRACE_SECONDS)
+            if worker.process.is_alive():
+                worker.process.kill()
+                worker.process.join()
+            pid = worker.process.pid
+            if worker.busy_with is not None and self.on_abandon is not None and pid is not None:
+                self.on_abandon(items[worker.busy_with], pid)
+            worker.connection.close()
