@@ -3,7 +3,7 @@
 :func:`load_yaml` gives what ``yaml.safe_load`` gives (the same types, merge keys included)
 for every document a sidecar could reasonably be, and refuses, with the line, what could hurt:
 
-- nesting deeper than :data:`MAX_DEPTH` (PyYAML composes and constructs recursively);
+- nodes nested deeper than :data:`MAX_DEPTH` (PyYAML composes and constructs recursively);
 - aliases that multiply the document ("billion laughs"): the node graph is measured as if
   every alias were expanded, without expanding it (memoised over shared nodes), and may be
   at most :data:`EXPANSION_FACTOR` times the nodes the file writes, or
@@ -27,7 +27,7 @@ from yaml.nodes import MappingNode, Node, ScalarNode, SequenceNode
 
 from .messages import one_line, quote
 
-#: Deepest nesting of collections accepted, counted through aliases (a sidecar needs 3).
+#: Deepest nesting of nodes accepted, counted through aliases (a sidecar needs 3).
 MAX_DEPTH = 64
 #: Expanded nodes always allowed, however small the file.
 MIN_EXPANDED_NODES = 10_000

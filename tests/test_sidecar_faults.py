@@ -73,11 +73,12 @@ def params_cli(path: Path):
 
 
 def refused_by_cli(path: Path, *expected: str) -> list[str]:
-    """Run the CLI on a bad sidecar: exit 2, nothing on stdout, lines naming the file."""
+    """Run the CLI on a bad sidecar: exit 2, nothing on stdout, lines naming file and place."""
     code, lines, stdout = params_cli(path)
     assert code == 2, lines
     assert stdout == ""
-    assert lines and all(line.startswith(f"Error: {path}") for line in lines), lines
+    place = re.compile(rf"Error: {re.escape(str(path))} (line \d+|record \S+)[,:] ")
+    assert lines and all(place.match(line) for line in lines), lines
     for text in expected:
         assert any(text in line for line in lines), (text, lines)
     return lines
