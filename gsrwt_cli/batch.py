@@ -21,7 +21,7 @@ import cv2
 import numpy as np
 
 from .camera import View
-from .executor import ProcessExecutor
+from .executor import Executor, ProcessExecutor
 from .imaging import (
     DEFAULT_MAX_INPUT_PIXELS,
     IMAGE_EXTENSIONS,
@@ -380,11 +380,13 @@ def run_batch(
     on_progress: Callable[[], None] | None = None,
     previous: Mapping[tuple[str, str], Mapping[str, Any]] | None = None,
     context: multiprocessing.context.BaseContext | None = None,
+    executor: Executor[Job, dict[str, Any]] | None = None,
 ) -> Counts:
     """Run all jobs, handing each row to ``on_row`` in job order; returns the counts.
 
-    Images are rectified in ``processes`` worker processes (:class:`~gsrwt_cli.executor.
-    ProcessExecutor`: a worker that dies costs only its image). Images whose output exists
+    Images are rectified by ``executor`` (default: ``processes`` worker processes of a
+    :class:`~gsrwt_cli.executor.ProcessExecutor`, where a worker that dies costs only its
+    image, started as ``context`` says). Images whose output exists
     (without ``overwrite``) and jobs known to fail are rowed here, without a worker; their
     row comes from ``previous`` (the last table's rows by ``(image, output)``) when it has
     one, else from :func:`record_row`. If the run is stopped (an exception such as
@@ -422,12 +424,13 @@ def run_batch(
 
     parent_jobs = {index for index, job in enumerate(jobs) if is_parent_job(job)}
     worker_jobs = [index for index in range(len(jobs)) if index not in parent_jobs]
-    executor: ProcessExecutor[Job, dict[str, Any]] = ProcessExecutor(
-        ImageWorker, (settings, 1 if processes > 1 else 0),
-        max(1, min(processes, len(worker_jobs))),
-        on_death=died_row, on_abandon=_remove_temporaries_of,
-        context=context or worker_context(),
-    )
+    if executor is None:
+        executor = ProcessExecutor(
+            ImageWorker, (settings, 1 if processes > 1 else 0),
+            max(1, min(processes, len(worker_jobs))),
+            on_death=died_row, on_abandon=_remove_temporaries_of,
+            context=context or worker_context(),
+        )
     results = executor.map_unordered([jobs[index] for index in worker_jobs])
     try:
         emit_ready()

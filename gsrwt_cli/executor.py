@@ -27,7 +27,7 @@ from collections import deque
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from multiprocessing.connection import Connection, wait
-from typing import Any, Generic, TypeVar
+from typing import Any, Generic, Protocol, TypeVar
 
 Item = TypeVar("Item")
 Result = TypeVar("Result")
@@ -82,6 +82,18 @@ def _worker_main(
     finally:
         with contextlib.suppress(OSError):
             sys.stderr.flush()
+
+
+class Executor(Protocol[Item, Result]):
+    """What the batch runner needs of an engine: results of items as they complete.
+
+    ``map_unordered`` yields ``(index, result)`` for every item, in any order, and stops its
+    work when the generator is closed (as the runner does on Ctrl-C). :class:`ProcessExecutor`
+    is the local one; a cluster's (a Dask client's ``map`` and ``as_completed``) fits the same
+    shape, with its workers built by the same ``make_worker``.
+    """
+
+    def map_unordered(self, items: Sequence[Item]) -> Iterator[tuple[int, Result]]: ...
 
 
 @dataclass

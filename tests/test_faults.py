@@ -255,7 +255,7 @@ def test_names_that_are_not_utf8_or_hold_newlines(tmp_path, jobs):
 
 
 def test_a_killed_worker_costs_only_its_image(tmp_path):
-    sources = make_photos(tmp_path / "in", 12)
+    sources = make_photos(tmp_path / "in", 30)
     before = sha256_tree(tmp_path / "in")
     process = start(["rectify", "in", *POSE, "-o", "out", "-j", "2"], tmp_path)
     wait_for_outputs(tmp_path / "out", 1, process)
@@ -273,12 +273,12 @@ def test_a_killed_worker_costs_only_its_image(tmp_path):
     assert stray_files(tmp_path) == []
     assert sha256_tree(tmp_path / "in") == before
     rerun = run_gsrwt("rectify", "in", *POSE, "-o", "out", cwd=tmp_path)
-    assert rerun.returncode == 0 and "1 ok, 11 skipped, 0 failed" in rerun.stderr
+    assert rerun.returncode == 0 and "1 ok, 29 skipped, 0 failed" in rerun.stderr
 
 
 @pytest.mark.parametrize("stop, code", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
 def test_interrupt_writes_the_table_of_what_finished(tmp_path, stop, code):
-    sources = make_photos(tmp_path / "in", 14)
+    sources = make_photos(tmp_path / "in", 40)
     process = start(["rectify", "in", *POSE, "-o", "out", "-j", "2"], tmp_path)
     wait_for_outputs(tmp_path / "out", 3, process)
     os.killpg(process.pid, stop)  # the whole group, as a terminal's Ctrl-C does
@@ -302,7 +302,7 @@ def test_interrupt_writes_the_table_of_what_finished(tmp_path, stop, code):
 
 
 def test_a_killed_parent_takes_its_workers_and_the_next_run_cleans_up(tmp_path):
-    sources = make_photos(tmp_path / "in", 14)
+    sources = make_photos(tmp_path / "in", 40)
     process = start(["rectify", "in", *POSE, "-o", "out", "-j", "2"], tmp_path)
     wait_for_outputs(tmp_path / "out", 2, process)
     os.kill(process.pid, signal.SIGKILL)
