@@ -13,7 +13,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from .geometry import GsrwtParameters, Matrix, gsrwt_parameters
+from .geometry import GsrwtParameters, Matrix, camera_from_world, gsrwt_parameters, map_points
 from .messages import quote
 
 
@@ -74,44 +74,37 @@ def _check_range(name: str, value: float, low: float, high: float, unit: str) ->
         raise ViewError(name, f"{name} must be below {high:g}{unit}, got {value:.15g}")
 
 
+#: OpenCV's camera axes (x right, y down, z forward) to the thesis's (X up, Y right, Z forward),
+#: ``X = -y_cv, Y = x_cv, Z = z_cv`` (spec section 6); the same matrix maps wall frames.
+THESIS_FROM_OPENCV = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+
+
 @dataclass(frozen=True)
-class View:
-    """Camera intrinsics and pose for one image.
+class Intrinsics:
+    """How a camera maps rays to pixels: ``K = [[fx, skew, cx], [0, fy, cy], [0, 0, 1]]``.
 
-    Convention
-    ----------
-    - ``pan``, ``tilt``: degrees, ``pan > 0`` turns left, ``tilt > 0`` tilts up (spec section 1);
-      strictly between -90 and 90, and the horizon at least :data:`MIN_HORIZON_OFFSET_PX`
-      from the principal point.
-    - ``focal``: focal length in pixels, ``0 < focal <`` :data:`MAX_FOCAL_PX`.
-    - ``cx``, ``cy``: principal point in pixels; default ``((width-1)/2, (height-1)/2)``;
-      ``|cx|, |cy| <`` :data:`MAX_PRINCIPAL_POINT_PX`.
-    - ``width``, ``height``: image size in pixels, when known; whole, 1 to :data:`MAX_SIDE_PX`.
-    - ``distance``: ``Zc``, camera to wall along the wall's normal, in the user's unit, within
-      :data:`DISTANCE_RANGE`.
-
-    Any real number is accepted (numpy scalars included) and stored as a Python number;
-    anything else, or a value out of range, raises :class:`ViewError` naming the field.
+    OpenCV's pixel convention (spec section 6): ``(col, row)``, row down, pixel centres at
+    integers; camera ``x`` right, ``y`` down. ``cx, cy`` default to the image centre
+    ``((width-1)/2, (height-1)/2)`` when the size is known. ``lens`` is the slot of a lens
+    distortion model: ``None``, a pinhole, until real cameras land. Values are checked as
+    :class:`View` documents, raising :class:`ViewError` naming the field.
     """
 
-    pan: float
-    tilt: float
-    focal: float
+    fx: float
+    fy: float
     cx: float | None = None
     cy: float | None = None
+    skew: float = 0.0
     width: int | None = None
     height: int | None = None
-    distance: float | None = None
-    parameters: GsrwtParameters = field(init=False, repr=False, compare=False)
+    lens: None = None
 
     def __post_init__(self) -> None:
-        for name in ("pan", "tilt", "focal", "cx", "cy", "width", "height", "distance"):
+        for name in ("fx", "fy", "cx", "cy", "skew", "width", "height"):
             object.__setattr__(self, name, _as_number(name, getattr(self, name)))
-        for name in ("pan", "tilt", "focal"):
-            if getattr(self, name) is None:
-                raise ViewError(name, f"{name} is required")
-        _check_range("focal", self.focal, 0, MAX_FOCAL_PX, " pixels")
-        for name in ("cx", "cy"):
+        for name in ("fx", "fy"):
+            _check_range(name, getattr(self, name), 0, MAX_FOCAL_PX, " pixels")
+        for name in ("cx", "cy", "skew"):
             value = getattr(self, name)
             if value is not None and abs(value) >= MAX_PRINCIPAL_POINT_PX:
                 raise ViewError(
@@ -130,14 +123,94 @@ class View:
             if value != int(value):
                 raise ViewError(name, f"{name} must be a whole number of pixels, got {value:.15g}")
             object.__setattr__(self, name, int(value))
-        if self.distance is not None:
-            _check_range("distance", self.distance, *DISTANCE_RANGE, "")
         if (self.cx is None) != (self.cy is None):
             missing = "cy" if self.cy is None else "cx"
             raise ViewError(missing, "cx and cy must be given together")
         if self.cx is None and self.width is not None and self.height is not None:
             object.__setattr__(self, "cx", (self.width - 1) / 2.0)
             object.__setattr__(self, "cy", (self.height - 1) / 2.0)
+        if self.lens is not None:
+            raise ViewError("lens", "lens distortion models are not supported yet")
+
+    @property
+    def focal(self) -> float:
+        """The focal length of the thesis's image frame, ``f = sqrt(fx fy)`` (spec section 6)."""
+        return self.fx if self.fx == self.fy else math.sqrt(self.fx * self.fy)
+
+    @property
+    def has_principal_point(self) -> bool:
+        return self.cx is not None
+
+    def _principal_point(self) -> tuple[float, float]:
+        if self.cx is None or self.cy is None:
+            raise ValueError("the principal point is unknown: give cx, cy or width, height")
+        return self.cx, self.cy
+
+    def matrix(self) -> Matrix:
+        """The camera matrix ``K`` (OpenCV's)."""
+        cx, cy = self._principal_point()
+        return np.array([[self.fx, self.skew, cx], [0.0, self.fy, cy], [0.0, 0.0, 1.0]])
+
+    def image_from_pixel(self) -> Matrix:
+        """Pixel ``(col, row, 1)`` to the thesis's image frame ``(x up, y right, 1)`` at focal
+        length :attr:`focal`: ``diag(f, f, 1) @ THESIS_FROM_OPENCV @ K^-1``.
+
+        Written out so that a square-pixel camera gives exactly ``x = cy - row`` and
+        ``y = col - cx``.
+        """
+        cx, cy = self._principal_point()
+        f, fx, fy, s = self.focal, self.fx, self.fy, self.skew
+        return np.array(
+            [
+                [0.0, -(f / fy), (f / fy) * cy],
+                [f / fx, -(f / fx) * (s / fy), (f / fx) * (s / fy * cy - cx)],
+                [0.0, 0.0, 1.0],
+            ]
+        )
+
+    def pixel_from_image(self) -> Matrix:
+        """Thesis image frame to pixel, the inverse of :meth:`image_from_pixel`."""
+        cx, cy = self._principal_point()
+        f, fx, fy, s = self.focal, self.fx, self.fy, self.skew
+        return np.array(
+            [
+                [-(s / f), fx / f, cx],
+                [-(fy / f), 0.0, cy],
+                [0.0, 0.0, 1.0],
+            ]
+        )
+
+    def rays_from_pixels(self, pixels: np.ndarray) -> np.ndarray:
+        """``(N, 2)`` pixels to ``(N, 3)`` ray directions in the thesis's camera frame
+        (``X`` up, ``Y`` right, ``Z`` forward), with ``Z = 1``."""
+        image = map_points(self.image_from_pixel(), pixels)
+        return np.column_stack([image / self.focal, np.ones(len(image))])
+
+    def pixels_from_rays(self, rays: np.ndarray) -> np.ndarray:
+        """``(N, 3)`` ray directions in the thesis's camera frame to ``(N, 2)`` pixels
+        (rays with ``Z <= 0`` come back as ``inf``/``nan``)."""
+        rays = np.asarray(rays, dtype=np.float64)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            image = self.focal * rays[:, :2] / rays[:, 2:3]
+        return map_points(self.pixel_from_image(), image)
+
+
+@dataclass(frozen=True)
+class Pose:
+    """Where a camera looks, relative to the wall: ``pan``, ``tilt``, ``roll`` in degrees.
+
+    ``pan > 0`` turns left, ``tilt > 0`` tilts up (spec section 1), both strictly between -90
+    and 90. ``roll`` turns the camera about its optical axis after them (spec section 6); it
+    is fixed at 0 until real cameras land.
+    """
+
+    pan: float
+    tilt: float
+    roll: float = 0.0
+
+    def __post_init__(self) -> None:
+        for name in ("pan", "tilt", "roll"):
+            object.__setattr__(self, name, _as_number(name, getattr(self, name)))
         for name in ("pan", "tilt"):
             value = getattr(self, name)
             if abs(value) >= 90.0:
@@ -146,47 +219,126 @@ class View:
                     f"{name} must be strictly between -90 and 90 degrees (the camera cannot see "
                     f"the wall otherwise), got {value:g}",
                 )
-        parameters = gsrwt_parameters(self.pan, self.tilt, self.focal)
+        if self.roll != 0:
+            raise ViewError("roll", "roll is not supported yet (it must be 0)")
+
+    def camera_from_world(self) -> Matrix:
+        """The rotation whose rows are the camera's axes in the wall's frame (Eq. 3.8)."""
+        return camera_from_world(self.pan, self.tilt)
+
+
+#: The fields a sidecar row or the command line gives for one view, in the tables' order:
+#: the pose, then the intrinsics, then the distance (derived here, used everywhere).
+VIEW_FIELDS = ("pan", "tilt", "focal", "cx", "cy", "width", "height", "distance")
+
+
+@dataclass(frozen=True, init=False)
+class View:
+    """The camera of one image: :class:`Intrinsics`, :class:`Pose` and the wall's distance.
+
+    ``View(pan, tilt, focal, cx=None, cy=None, width=None, height=None, distance=None)``, or
+    ``View(intrinsics=..., pose=..., distance=...)``.
+
+    Convention
+    ----------
+    - ``pan``, ``tilt``: degrees, ``pan > 0`` turns left, ``tilt > 0`` tilts up (spec section 1);
+      strictly between -90 and 90, and the horizon at least :data:`MIN_HORIZON_OFFSET_PX`
+      from the principal point.
+    - ``focal``: focal length in pixels, ``0 < focal <`` :data:`MAX_FOCAL_PX`.
+    - ``cx``, ``cy``: principal point in pixels; default ``((width-1)/2, (height-1)/2)``;
+      ``|cx|, |cy| <`` :data:`MAX_PRINCIPAL_POINT_PX`.
+    - ``width``, ``height``: image size in pixels, when known; whole, 1 to :data:`MAX_SIDE_PX`.
+    - ``distance``: ``Zc``, camera to wall along the wall's normal, in the user's unit, within
+      :data:`DISTANCE_RANGE`.
+
+    Any real number is accepted (numpy scalars included) and stored as a Python number;
+    anything else, or a value out of range, raises :class:`ViewError` naming the field.
+    """
+
+    intrinsics: Intrinsics
+    pose: Pose
+    distance: float | None
+    parameters: GsrwtParameters = field(repr=False, compare=False)
+
+    def __init__(
+        self,
+        pan: float | None = None,
+        tilt: float | None = None,
+        focal: float | None = None,
+        cx: float | None = None,
+        cy: float | None = None,
+        width: int | None = None,
+        height: int | None = None,
+        distance: float | None = None,
+        *,
+        intrinsics: Intrinsics | None = None,
+        pose: Pose | None = None,
+        parameters: GsrwtParameters | None = None,  # accepted from dataclasses.replace
+    ) -> None:
+        if pose is None:
+            for name, value in (("pan", pan), ("tilt", tilt)):
+                if value is None:
+                    raise ViewError(name, f"{name} is required")
+            pose = Pose(pan, tilt)  # type: ignore[arg-type]
+        if intrinsics is None:
+            focal = _as_number("focal", focal)
+            if focal is None:
+                raise ViewError("focal", "focal is required")
+            _check_range("focal", focal, 0, MAX_FOCAL_PX, " pixels")
+            intrinsics = Intrinsics(focal, focal, cx, cy, width=width, height=height)
+        distance = _as_number("distance", distance)
+        if distance is not None:
+            _check_range("distance", distance, *DISTANCE_RANGE, "")
+        object.__setattr__(self, "intrinsics", intrinsics)
+        object.__setattr__(self, "pose", pose)
+        object.__setattr__(self, "distance", distance)
+        parameters = gsrwt_parameters(pose.pan, pose.tilt, intrinsics.focal)
         if not parameters.is_frontal and parameters.shift < MIN_HORIZON_OFFSET_PX:
-            name = "pan" if abs(self.pan) >= abs(self.tilt) else "tilt"
+            name = "pan" if abs(pose.pan) >= abs(pose.tilt) else "tilt"
             raise ViewError(
                 name,
-                f"pan {self.pan!r} and tilt {self.tilt!r} with focal {self.focal:g} put the "
-                f"horizon {parameters.shift:.2g} pixels from the principal point, less than "
-                f"{MIN_HORIZON_OFFSET_PX:g} (the optical axis meets the wall beyond what the "
-                "camera resolves)",
+                f"pan {pose.pan!r} and tilt {pose.tilt!r} with focal {intrinsics.focal:g} put "
+                f"the horizon {parameters.shift:.2g} pixels from the principal point, less "
+                f"than {MIN_HORIZON_OFFSET_PX:g} (the optical axis meets the wall beyond what "
+                "the camera resolves)",
             )
         object.__setattr__(self, "parameters", parameters)
 
+    pan = property(lambda self: self.pose.pan, doc="Pan in degrees (:class:`Pose`).")
+    tilt = property(lambda self: self.pose.tilt, doc="Tilt in degrees (:class:`Pose`).")
+    focal = property(lambda self: self.intrinsics.focal, doc="Focal length in pixels.")
+    cx = property(lambda self: self.intrinsics.cx, doc="Principal point column.")
+    cy = property(lambda self: self.intrinsics.cy, doc="Principal point row.")
+    width = property(lambda self: self.intrinsics.width, doc="Image width, if known.")
+    height = property(lambda self: self.intrinsics.height, doc="Image height, if known.")
+
     def with_size(self, width: int, height: int) -> View:
         """The same view with a known image size (the principal point defaults to its centre)."""
-        return replace(self, width=width, height=height)
+        return replace(self, intrinsics=replace(self.intrinsics, width=width, height=height))
 
     @property
     def has_principal_point(self) -> bool:
         """Whether pixel coordinates can be related to the image frame."""
-        return self.cx is not None
+        return self.intrinsics.has_principal_point
 
     def _principal_point(self) -> tuple[float, float]:
-        if self.cx is None or self.cy is None:
-            raise ValueError("the principal point is unknown: give cx, cy or width, height")
-        return self.cx, self.cy
+        return self.intrinsics._principal_point()
 
     def image_from_pixel(self) -> Matrix:
-        """``[x, y, 1] = A @ [col, row, 1]`` with ``x = cy - row`` and ``y = col - cx``."""
-        cx, cy = self._principal_point()
-        return np.array([[0.0, -1.0, cy], [1.0, 0.0, -cx], [0.0, 0.0, 1.0]])
+        """``[x, y, 1] = A @ [col, row, 1]`` (:meth:`Intrinsics.image_from_pixel`)."""
+        return self.intrinsics.image_from_pixel()
 
     def pixel_from_image(self) -> Matrix:
-        """``[col, row, 1] = A @ [x, y, 1]`` with ``col = y + cx`` and ``row = cy - x``."""
-        cx, cy = self._principal_point()
-        return np.array([[0.0, 1.0, cx], [-1.0, 0.0, cy], [0.0, 0.0, 1.0]])
+        """``[col, row, 1] = A @ [x, y, 1]`` (:meth:`Intrinsics.pixel_from_image`)."""
+        return self.intrinsics.pixel_from_image()
 
     def vanishing_point_pixels(self) -> np.ndarray:
         """The main vanishing point as ``(col, row)``; ``inf`` for the frontal view."""
         x, y = self.parameters.vanishing_point
         cx, cy = self._principal_point()
-        return np.array([y + cx, cy - x])
+        if self.intrinsics.fx == self.intrinsics.fy and self.intrinsics.skew == 0:
+            return np.array([y + cx, cy - x])  # exact where infinite
+        return map_points(self.pixel_from_image(), [[x, y]])[0]
 
     def vanishing_line_pixels(self) -> np.ndarray | None:
         """``(a, b, c)`` with ``a col + b row + c = 0`` and ``a^2 + b^2 = 1`` (Eq. 4.28-4.30).

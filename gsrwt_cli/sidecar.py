@@ -35,12 +35,11 @@ from typing import Any
 
 import yaml
 
-from .camera import View, ViewError
+from .camera import VIEW_FIELDS, View, ViewError
 from .geometry import pan_tilt_from_gsrwt
 from .messages import escape_controls, one_line, quote
 from .safe_yaml import YamlInputError, load_yaml
 
-VIEW_FIELDS = ("pan", "tilt", "focal", "cx", "cy", "width", "height", "distance")
 GSRWT_FIELDS = ("delta", "a", "gamma")
 NUMERIC_FIELDS = VIEW_FIELDS + GSRWT_FIELDS
 #: How far a given gamma may stray from the one that delta and a imply (the thesis rounds to 1°).

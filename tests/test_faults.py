@@ -12,10 +12,10 @@ import csv
 import hashlib
 import io
 import os
+import shutil
 import signal
 import subprocess
 import sys
-import tempfile
 import time
 import zlib
 from pathlib import Path
@@ -422,46 +422,42 @@ def test_an_output_under_a_file_is_one_line_exit_2(tmp_path, option):
     assert (tmp_path / "FILE").read_text() == "keep me"
 
 
-def nobody_can_run_gsrwt() -> bool:
-    if os.geteuid() != 0:
-        return False
-    probe = subprocess.run(["setpriv", "--reuid=65534", "--regid=65534", "--clear-groups",
-                            str(GSRWT), "--version"], capture_output=True)
-    return probe.returncode == 0
+def without_permission_override(*args: str, cwd: Path) -> subprocess.CompletedProcess:
+    """Run gsrwt as this user but without the capabilities that let root ignore permission
+    bits (CAP_DAC_OVERRIDE, CAP_DAC_READ_SEARCH), so a directory of mode 000 is unreadable."""
+    return subprocess.run(["setpriv", "--bounding-set=-dac_override,-dac_read_search",
+                           str(GSRWT), *args], capture_output=True, text=True, cwd=cwd,
+                          timeout=120)
 
 
 def test_unreadable_directories_are_reported(tmp_path):
-    if not nobody_can_run_gsrwt():
-        pytest.skip("needs root, setpriv and a gsrwt that user 'nobody' can run")
-    root = Path(tempfile.mkdtemp(dir="/tmp", prefix="gsrwt-perm-"))
+    if shutil.which("setpriv") is None:
+        pytest.skip("needs setpriv (util-linux) to drop permission overrides")
+    tree = tmp_path / "in"
+    (tree / "open").mkdir(parents=True)
+    (tree / "closed").mkdir()
+    for folder in (tree / "open", tree / "closed"):
+        cv2.imwrite(str(folder / "a.png"), smooth_texture(40, 50, 1))
+    os.chmod(tree / "closed", 0)
     try:
-        os.chmod(root, 0o777)
-        tree = root / "in"
-        (tree / "open").mkdir(parents=True)
-        (tree / "closed").mkdir()
-        for folder in (tree / "open", tree / "closed"):
-            cv2.imwrite(str(folder / "a.png"), smooth_texture(40, 50, 1))
-        os.chmod(tree, 0o755)
-        os.chmod(tree / "open", 0o755)
-        os.chmod(tree / "open" / "a.png", 0o644)
-        os.chmod(tree / "closed", 0o700)  # root's: nobody cannot list it
-
-        def as_nobody(*args: str) -> subprocess.CompletedProcess:
-            return subprocess.run(["setpriv", "--reuid=65534", "--regid=65534",
-                                   "--clear-groups", str(GSRWT), *args], capture_output=True,
-                                  text=True, cwd=root, timeout=120)
-
-        recursive = as_nobody("rectify", "-r", "in", *POSE, "-o", "out")
+        probe = subprocess.run(["setpriv", "--bounding-set=-dac_override,-dac_read_search",
+                                "ls", str(tree / "closed")], capture_output=True)
+        if probe.returncode == 0:
+            pytest.skip("this user reads a directory of mode 000 anyway")
+        recursive = without_permission_override("rectify", "-r", "in", *POSE, "-o", "out",
+                                                cwd=tmp_path)
         assert recursive.returncode == 1, recursive.stderr
         assert_clean_stderr(recursive.stderr)
         assert "in/closed: cannot read directory (Permission denied)" in recursive.stderr
-        assert (root / "out" / "open" / "a.png").is_file()
-        top = as_nobody("rectify", "in/closed", *POSE, "-o", "out2")
+        assert (tmp_path / "out" / "open" / "a.png").is_file()
+        top = without_permission_override("rectify", "in/closed", *POSE, "-o", "out2",
+                                          cwd=tmp_path)
         assert top.returncode == 2
         (line,) = top.stderr.strip().splitlines()
         assert "in/closed: cannot read directory (Permission denied)" in line
+        assert not (tmp_path / "out2").exists()
     finally:
-        subprocess.run(["rm", "-rf", str(root)], check=False)
+        os.chmod(tree / "closed", 0o755)
 
 
 # --------------------------------------------------------------------------------------------
