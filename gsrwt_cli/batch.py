@@ -119,6 +119,10 @@ class Job:
     existed: bool = False  # the output existed when the run began
 
 
+#: A function that words an error for the user, or returns None for the error's own text.
+Describe = Callable[[BaseException], "str | None"]
+
+
 @dataclass(frozen=True)
 class Settings:
     """The options of one ``gsrwt rectify`` run, shared by all workers."""
@@ -136,6 +140,8 @@ class Settings:
     dry_run: bool = False
     max_input_pixels: float = DEFAULT_MAX_INPUT_PIXELS
     root: Path | None = None  # the output directory: nothing is written outside it
+    #: Words an error in the caller's terms (a module-level function: it goes to workers).
+    describe: Describe | None = None
 
 
 def plan_jobs(
@@ -182,17 +188,19 @@ def plan_jobs(
 # --------------------------------------------------------------------------------------------
 
 
-def _homography_text(matrix) -> str:
-    return " ".join(f"{value:.12g}" for value in matrix.ravel())
-
-
 class _JobError(Exception):
     pass
 
 
-def _error_text(error: BaseException) -> str:
-    """One line for a failure: the reason for expected errors, the type for unexpected ones."""
-    if isinstance(error, OSError) and error.strerror:
+def _error_text(error: BaseException, describe: Describe | None = None) -> str:
+    """One line for a failure: the reason for expected errors, the type for unexpected ones.
+
+    ``describe`` may word an error in the caller's terms (a command's option names).
+    """
+    described = describe(error) if describe is not None else None
+    if described is not None:
+        text = described
+    elif isinstance(error, OSError) and error.strerror:
         text = error.strerror + (f": {error.filename}" if error.filename else "")
     elif isinstance(error, (_JobError, ImageError, OutsideOutputError, RecordError, ValueError)):
         text = str(error)
@@ -214,9 +222,7 @@ def _view(job: Job) -> View:
 def _geometry(info: RectifyInfo) -> dict[str, Any]:
     return {
         **params_row(info.view, None),
-        "out_width": info.size[0],
-        "out_height": info.size[1],
-        "homography": _homography_text(info.homography),
+        **info.pixel_map.table_columns(),
     }
 
 
@@ -256,15 +262,14 @@ def process_job(job: Job, settings: Settings, scratch: Scratch | None = None) ->
             )
             if not settings.dry_run:
                 warped = scratch.warp(
-                    info.homography, info.size, settings.interpolation, settings.fill,
-                    settings.alpha,
+                    info.pixel_map, settings.interpolation, settings.fill, settings.alpha
                 )
                 encoded = encode_image(warped, job.output.suffix, settings.quality)
                 del warped
                 write_atomic(job.output, encoded, root=settings.root)
         row.update(_geometry(info), image=str(job.source), status="ok")
     except Exception as error:  # every failure of one image is that image's row
-        row.update(status="error", error=_error_text(error))
+        row.update(status="error", error=_error_text(error, settings.describe))
     return row
 
 
@@ -290,7 +295,7 @@ def record_row(job: Job, settings: Settings, status: str = "skipped") -> dict[st
             )
     except Exception as error:
         row.update(status=status, error=f"output exists; its geometry is unknown: "
-                   f"{_error_text(error)}")
+                   f"{_error_text(error, settings.describe)}")
     return row
 
 

@@ -14,9 +14,9 @@ from typing import Any
 
 import numpy as np
 
-from .geometry import Matrix, map_points
 from .imaging import ImageError, read_image
 from .parameters import NotFound, Problem, resolve_parameters
+from .pixelmap import PixelMap
 from .rectify import rectify_image
 from .sidecar import RecordError, Sidecar
 
@@ -27,13 +27,13 @@ class CanonicalView:
 
     path: Path
     pixels: np.ndarray
-    canonical_from_source: Matrix | None  # None: the image was frontal already
+    pixel_map: PixelMap | None  # canonical from source pixels; None: frontal already
 
     def to_source(self, points: np.ndarray) -> np.ndarray | None:
         """``(N, 2)`` canonical pixels in the original image, or None if there is no map."""
-        if self.canonical_from_source is None:
+        if self.pixel_map is None:
             return None
-        return map_points(np.linalg.inv(self.canonical_from_source), points)
+        return self.pixel_map.to_input(points)
 
 
 def canonical_views(
@@ -59,4 +59,4 @@ def canonical_views(
         except (RecordError, ValueError) as error:
             yield path, str(error)
             continue
-        yield CanonicalView(path, frontal, info.homography)
+        yield CanonicalView(path, frontal, info.pixel_map)

@@ -14,6 +14,7 @@ import numpy as np
 
 from .camera import View
 from .geometry import Matrix, map_points
+from .pixelmap import PixelMap
 
 
 def canonical_from_pixel(view: View) -> Matrix:
@@ -156,22 +157,53 @@ def full_frame(
     reference = local_stretch(homography, np.array([[view.cx, view.cy]]))[0]
     keep = visible[local_stretch(homography, visible) <= max_stretch * reference]
     if len(keep) == 0:
-        raise ValueError(
-            f"no part of the image is within --max-stretch {max_stretch:g} "
-            "(the vanishing line covers it); raise --max-stretch or use --bbox frontal"
-        )
+        raise NothingWithinStretchError(max_stretch)
     mapped = map_points(homography, keep)
     low = np.floor(mapped.min(axis=0) + 0.5)
     high = np.ceil(mapped.max(axis=0) + 0.5)
     return Frame(float(low[0]), float(low[1]), float(high[0]), float(high[1]), scale)
 
 
+class OutputTooLargeError(ValueError):
+    """The output frame has more pixels than allowed: ``width x height`` above ``limit``."""
+
+    def __init__(self, width: int, height: int, limit: float) -> None:
+        self.width, self.height, self.limit = width, height, limit
+        super().__init__(
+            f"the output would be {width}x{height} = {width * height / 1e6:.1f} megapixels, "
+            f"above the limit of {limit / 1e6:g} megapixels"
+        )
+
+
+class NothingWithinStretchError(ValueError):
+    """No input pixel is magnified at most ``max_stretch`` times (:func:`full_frame`)."""
+
+    def __init__(self, max_stretch: float) -> None:
+        self.max_stretch = max_stretch
+        super().__init__(
+            f"no part of the image is within a stretch of {max_stretch:g} (the vanishing line "
+            "covers it)"
+        )
+
+
 @dataclass(frozen=True)
 class Plan:
-    """Where one image goes: the frame and the homography from input to output pixels."""
+    """What is done to one image: the view (with its size), the output frame, and the pixel
+    map from input to output pixels."""
 
+    view: View
     frame: Frame
-    homography: Matrix
+    pixel_map: PixelMap
+
+    @property
+    def size(self) -> tuple[int, int]:
+        """Output ``(width, height)``."""
+        return self.pixel_map.size
+
+    @property
+    def homography(self) -> Matrix:
+        """``output (col, row, 1) ~ homography @ input (col, row, 1)``."""
+        return self.pixel_map.output_from_input
 
 
 def plan_output(
@@ -181,11 +213,11 @@ def plan_output(
     max_stretch: float = 4.0,
     max_pixels: float = 50e6,
 ) -> Plan:
-    """Choose the output frame (spec section 5) and compose the one pixel homography.
+    """Choose the output frame (spec section 5) and compose the one pixel map.
 
     ``bbox``: ``"frontal"`` (default frame), ``"full"`` (:func:`full_frame`) or an explicit
     ``(x0, y0, x1, y1)`` in default-frame pixel edges. Raises ``ValueError`` for an empty
-    output or one larger than ``max_pixels``.
+    output, :class:`OutputTooLargeError` for one larger than ``max_pixels``.
     """
     if view.width is None or view.height is None:
         raise ValueError("the image size is needed to frame the output")
@@ -215,12 +247,9 @@ def _plan_output(
     if width < 1 or height < 1:
         raise ValueError(f"the output would be empty ({width}x{height} pixels)")
     if width * height > max_pixels:
-        raise ValueError(
-            f"the output would be {width}x{height} = {width * height / 1e6:.1f} megapixels, "
-            f"above --max-pixels {max_pixels / 1e6:g} megapixels; use --bbox frontal, a "
-            "smaller --scale, a lower --max-stretch or a higher --max-pixels"
-        )
-    return Plan(frame, frame.output_from_default() @ output_from_input(view))
+        raise OutputTooLargeError(width, height, max_pixels)
+    homography = frame.output_from_default() @ output_from_input(view)
+    return Plan(view, frame, PixelMap(homography, (width, height)))
 
 
 def texture_from_camera(view: View, texture_size: tuple[int, int]) -> Matrix:
@@ -242,3 +271,12 @@ def texture_from_camera(view: View, texture_size: tuple[int, int]) -> Matrix:
          [0.0, 0.0, 1.0]]
     )
     return shift @ output_from_input(view)
+
+
+def render_map(view: View, texture_size: tuple[int, int]) -> PixelMap:
+    """The pixel map of ``gsrwt render``: camera pixels (the output, of the view's size) from
+    texture pixels (the input), the inverse of :func:`texture_from_camera`."""
+    if view.width is None or view.height is None:
+        raise ValueError("the view needs an image size (width and height) to render")
+    camera_from_texture = np.linalg.inv(texture_from_camera(view, texture_size))
+    return PixelMap(camera_from_texture, (view.width, view.height))

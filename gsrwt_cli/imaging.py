@@ -17,7 +17,7 @@ import cv2
 import imagesize
 import numpy as np
 
-from .geometry import Matrix
+from .pixelmap import PixelMap
 
 #: File types gsrwt looks for in directories (OpenCV reads them all).
 IMAGE_EXTENSIONS = (".jpg", ".jpeg", ".jpe", ".png", ".tif", ".tiff", ".bmp", ".webp")
@@ -56,6 +56,18 @@ def silence_opencv_logging() -> None:
 
 class ImageError(Exception):
     """An image that cannot be read or written; the message says why (not which file)."""
+
+
+class ImageFormatError(ImageError):
+    """A file format that cannot hold an image: ``reason`` says why, ``alternatives`` lists
+    the formats (extensions without the dot) that could."""
+
+    def __init__(self, extension: str, what: str, alternatives: list[str]) -> None:
+        self.extension, self.alternatives = extension, alternatives
+        self.reason = f"{extension} cannot store {what}"
+        advice = (f"formats that can: {', '.join(alternatives)}" if alternatives
+                  else "no output format gsrwt writes can hold them")
+        super().__init__(f"{self.reason}; {advice}")
 
 
 def canonical_extension(extension: str) -> str:
@@ -98,14 +110,11 @@ def check_writable(
                 f"{size[0]}x{size[1]})")
     if what is None:
         return
-    others = [
+    raise ImageFormatError(ext, what, [
         other.lstrip(".") for other, (other_dtypes, other_channels) in _WRITABLE.items()
         if other != ext and dtype_name in other_dtypes and channels in other_channels
         and (size is None or max(size) <= _MAX_SIDE[other])
-    ]
-    advice = (f"use --ext {' or --ext '.join(others)}" if others
-              else "no output format gsrwt writes can hold them")
-    raise ImageError(f"{ext} cannot store {what}; {advice}")
+    ])
 
 
 # --------------------------------------------------------------------------------------------
@@ -303,38 +312,25 @@ def to_working(image: np.ndarray, alpha: bool = False, out: np.ndarray | None = 
 
 def warp_working(
     source: Working,
-    output_from_input: Matrix,
-    size: tuple[int, int],
+    pixel_map: PixelMap,
     interpolation: str = "linear",
     fill: float = 0.0,
     alpha: bool = False,
     out: np.ndarray | None = None,
 ) -> Working:
-    """Backward-map the pixels through a homography in one OpenCV pass (thesis Sec. 5.1).
+    """Resample the pixels through ``pixel_map`` (:meth:`PixelMap.warp`, one OpenCV pass).
 
-    ``size`` is the output's ``(width, height)``. Output pixels with no source get ``fill``
-    (in the image's own units), opaque, or transparent with ``alpha``. Output pixels that
-    map to the far side of the vanishing line (``w <= 0``: what the camera saw beyond the
-    wall's horizon) get the same: ``output_from_input`` must be scaled so that ``w > 0``
-    where the wall is visible, as the framing module's homographies are. ``out``: an array
-    of the output's shape and type to write into (see :class:`Scratch`).
+    Output pixels with no source (outside the input, or beyond the wall's horizon) get
+    ``fill`` (in the image's own units), opaque, or transparent with ``alpha``. ``out``: an
+    array of the output's shape and type to write into (see :class:`Scratch`).
     """
-    width, height = size
     pixels = source.pixels
     channels = 1 if pixels.ndim == 2 else pixels.shape[2]
     border = [fill] * min(channels, 3)
     if channels == 4:
         border.append(0.0 if alpha else _full_value(pixels.dtype))
-    warped = cv2.warpPerspective(
-        pixels,
-        np.asarray(output_from_input, dtype=np.float64),
-        (width, height),
-        dst=out,
-        flags=INTERPOLATIONS[interpolation],
-        borderMode=cv2.BORDER_CONSTANT,
-        borderValue=tuple(border + [0.0] * (4 - len(border))),
-    )
-    _fill_beyond_horizon(warped, output_from_input, border)
+    fill_values = tuple(border + [0.0] * (4 - len(border)))
+    warped = pixel_map.warp(pixels, INTERPOLATIONS[interpolation], fill_values, out)
     return Working(warped, source.padded)
 
 
@@ -347,8 +343,7 @@ def from_working(warped: Working) -> np.ndarray:
 
 def warp_image(
     image: np.ndarray,
-    output_from_input: Matrix,
-    size: tuple[int, int],
+    pixel_map: PixelMap,
     interpolation: str = "linear",
     fill: float = 0.0,
     alpha: bool = False,
@@ -358,9 +353,7 @@ def warp_image(
     With ``alpha`` the result has an alpha channel (added if the image had none).
     """
     source = to_working(image, alpha)
-    return from_working(
-        warp_working(source, output_from_input, size, interpolation, fill, alpha)
-    )
+    return from_working(warp_working(source, pixel_map, interpolation, fill, alpha))
 
 
 class Scratch:
@@ -404,8 +397,7 @@ class Scratch:
 
     def warp(
         self,
-        output_from_input: Matrix,
-        size: tuple[int, int],
+        pixel_map: PixelMap,
         interpolation: str = "linear",
         fill: float = 0.0,
         alpha: bool = False,
@@ -414,7 +406,7 @@ class Scratch:
         image, self._decoded = self._decoded, None
         if image is None:
             raise RuntimeError("Scratch.warp needs an image from Scratch.read first")
-        width, height = size
+        width, height = pixel_map.size
         channels = 1 if image.ndim == 2 else image.shape[2]
         converts = channels == 3 or (alpha and channels == 1)
         if converts:
@@ -425,47 +417,7 @@ class Scratch:
             source = to_working(image, alpha)
         out_shape = (height, width, *source.pixels.shape[2:])
         out = self.array(0, out_shape, source.pixels.dtype)
-        return warp_working(source, output_from_input, size, interpolation, fill, alpha, out)
-
-
-def _fill_beyond_horizon(warped: np.ndarray, output_from_input: Matrix, value: list) -> None:
-    """Fill output pixels whose source lies beyond the vanishing line (``w <= 0``).
-
-    In the output that region is a half-plane, ``(H^-1)[2] . (col, row, 1) <= 0``, given
-    ``H`` scaled so that ``w > 0`` on the visible side (as :func:`~gsrwt_cli.framing.
-    output_from_input` makes it); it is clipped to the image and filled.
-    """
-    height, width = warped.shape[:2]
-    homography = np.asarray(output_from_input, dtype=np.float64)
-    line = np.linalg.inv(homography)[2]  # (H^-1 o)_3 = 1 / w(p) for o ~ H p
-    corners = [(-0.5, -0.5), (width - 0.5, -0.5), (width - 0.5, height - 0.5), (-0.5, height - 0.5)]
-    polygon = _clip_to_half_plane(corners, line)
-    if len(polygon) >= 3:
-        scale = 256  # 8 fractional bits
-        points = np.round((np.array(polygon) + 0.5) * scale - 0.5).astype(np.int32)
-        color = tuple(value + [0.0] * (4 - len(value)))
-        cv2.fillPoly(warped, [points], color, lineType=cv2.LINE_8, shift=8)
-
-
-def _clip_to_half_plane(polygon: list[tuple[float, float]], line: np.ndarray):
-    """The part of a convex polygon where ``line . (x, y, 1) <= 0`` (Sutherland-Hodgman)."""
-    clipped = []
-    count = len(polygon)
-    for index in range(count):
-        current, following = polygon[index], polygon[(index + 1) % count]
-        d_current = line[0] * current[0] + line[1] * current[1] + line[2]
-        d_following = line[0] * following[0] + line[1] * following[1] + line[2]
-        if d_current <= 0:
-            clipped.append(current)
-        if (d_current <= 0) != (d_following <= 0):
-            t = d_current / (d_current - d_following)
-            clipped.append(
-                (
-                    current[0] + t * (following[0] - current[0]),
-                    current[1] + t * (following[1] - current[1]),
-                )
-            )
-    return clipped
+        return warp_working(source, pixel_map, interpolation, fill, alpha, out)
 
 
 # --------------------------------------------------------------------------------------------

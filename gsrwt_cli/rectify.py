@@ -5,28 +5,21 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
 from .camera import View
-from .framing import Frame, plan_output
-from .geometry import Matrix
+from .framing import Plan, plan_output
 from .imaging import warp_image
 
+#: What was done to one image (the view, the output frame, the pixel map): a framing Plan.
+RectifyInfo = Plan
 
-@dataclass(frozen=True)
-class RectifyInfo:
-    """What was done to one image: the view, the output frame and the pixel homography."""
 
-    view: View
-    frame: Frame
-    homography: Matrix  # output (col, row, 1) ~ homography @ input (col, row, 1)
+class MissingDistanceError(ValueError):
+    """Metric output (pixels per unit of distance) for an image whose distance is unknown."""
 
-    @property
-    def size(self) -> tuple[int, int]:
-        """Output ``(width, height)``."""
-        return self.frame.size
+    def __init__(self) -> None:
+        super().__init__("metric output needs the camera-to-wall 'distance' of the image")
 
 
 def view_for_image(view: View, width: int, height: int) -> View:
@@ -50,7 +43,7 @@ def resolve_scale(view: View, scale: float = 1.0, px_per_unit: float | None = No
     if px_per_unit is None:
         return scale
     if view.distance is None:
-        raise ValueError("--px-per-unit needs the camera-to-wall 'distance' of the image")
+        raise MissingDistanceError()
     return px_per_unit * view.distance / view.focal
 
 
@@ -67,10 +60,9 @@ def plan_image(
 ) -> RectifyInfo:
     """The geometry of rectifying a ``width x height`` image taken with ``view`` (no pixels)."""
     sized = view_for_image(view, width, height)
-    plan = plan_output(
+    return plan_output(
         sized, bbox, resolve_scale(sized, scale, px_per_unit), max_stretch, max_pixels
     )
-    return RectifyInfo(sized, plan.frame, plan.homography)
 
 
 def rectify_image(
@@ -99,5 +91,5 @@ def rectify_image(
         view, width, height, bbox=bbox, scale=scale, px_per_unit=px_per_unit,
         max_stretch=max_stretch, max_pixels=max_pixels,
     )
-    output = warp_image(image, info.homography, info.size, interpolation, fill, alpha)
+    output = warp_image(image, info.pixel_map, interpolation, fill, alpha)
     return output, info

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from .camera import View
-from .framing import texture_from_camera
+from .framing import render_map
 from .imaging import warp_image
 
 
@@ -21,15 +21,10 @@ def render_view(
 
     ``view`` must know its image size. The texture's centre is at the foot of the
     perpendicular from the camera, one texture pixel per ``Zc/f`` wall units
-    (:func:`~gsrwt_cli.framing.texture_from_camera`). Backward mapping: every camera pixel
+    (:func:`~gsrwt_cli.framing.render_map`). Backward mapping: every camera pixel
     looks up its texture pixel through the GS-RWT, i.e. the texture is warped by the inverse
     transform. Pixels that see no texture, or look above the wall's horizon, get ``fill``
     (transparent with ``alpha``).
     """
-    if view.width is None or view.height is None:
-        raise ValueError("the view needs an image size (width and height) to render")
     height, width = texture.shape[:2]
-    camera_from_texture = np.linalg.inv(texture_from_camera(view, (width, height)))
-    return warp_image(
-        texture, camera_from_texture, (view.width, view.height), interpolation, fill, alpha
-    )
+    return warp_image(texture, render_map(view, (width, height)), interpolation, fill, alpha)

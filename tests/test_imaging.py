@@ -22,6 +22,7 @@ from gsrwt_cli.imaging import (
     warp_image,
 )
 from gsrwt_cli.outputs import write_atomic
+from gsrwt_cli.pixelmap import PixelMap
 
 
 def test_scratch_gives_the_same_pixels_as_fresh_arrays_across_shapes_and_types(tmp_path):
@@ -44,9 +45,9 @@ def test_scratch_gives_the_same_pixels_as_fresh_arrays_across_shapes_and_types(t
         homography = output_from_input(View(20, -10, 150, width=width, height=height))
         size = (width + 30, height - 10)
         for alpha in (False, True):
-            expected = warp_image(image, homography, size, "linear", 9, alpha)
+            expected = warp_image(image, PixelMap(homography, size), "linear", 9, alpha)
             scratch.read(path)
-            warped = scratch.warp(homography, size, "linear", 9, alpha)
+            warped = scratch.warp(PixelMap(homography, size), "linear", 9, alpha)
             got = cv2.cvtColor(warped.pixels, cv2.COLOR_BGRA2BGR) if warped.padded else (
                 warped.pixels)
             np.testing.assert_array_equal(got, expected)

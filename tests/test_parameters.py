@@ -177,9 +177,9 @@ def test_canonical_views_take_each_kind_of_result(tmp_path):
     (folder / "good.yaml").write_text("pan: 10\ntilt: 5\nfocal: 300\n")
     (folder / "bad.yaml").write_text("- not a mapping\n")
     results = list(canonical_views([good, bad, none], None, {}))
-    assert isinstance(results[0], CanonicalView) and results[0].canonical_from_source is not None
+    assert isinstance(results[0], CanonicalView) and results[0].pixel_map is not None
     assert results[1] == (bad, f"{folder / 'bad.yaml'}: expected a mapping of field to value")
-    assert isinstance(results[2], CanonicalView) and results[2].canonical_from_source is None
+    assert isinstance(results[2], CanonicalView) and results[2].pixel_map is None
     assert np.array_equal(results[2].pixels, cv2.imread(str(none), cv2.IMREAD_UNCHANGED))
 
 

@@ -27,14 +27,17 @@ from ..batch import (
     sources_from_directory,
     worker_context,
 )
+from ..framing import NothingWithinStretchError, OutputTooLargeError
 from ..imaging import (
     INTERPOLATIONS,
     ImageError,
+    ImageFormatError,
     canonical_extension,
     check_writable,
 )
 from ..messages import one_line, quote
 from ..outputs import open_atomic, remove_stale_temporaries
+from ..rectify import MissingDistanceError
 from ..sidecar import SidecarError, load_sidecar
 from ..tables import TableWriter, format_from_extension, read_table
 from .options import InputError, view_defaults, view_options
@@ -168,6 +171,29 @@ def previous_rows(path: str, fmt: str) -> dict[tuple[str, str], dict[str, Any]]:
     }
 
 
+def describe_error(error: BaseException) -> str | None:
+    """A core error in terms of ``gsrwt rectify``'s options, or None for its own text."""
+    if isinstance(error, OutputTooLargeError):
+        pixels = error.width * error.height
+        return (
+            f"the output would be {error.width}x{error.height} = {pixels / 1e6:.1f} "
+            f"megapixels, above --max-pixels {error.limit / 1e6:g} megapixels; use --bbox "
+            "frontal, a smaller --scale, a lower --max-stretch or a higher --max-pixels"
+        )
+    if isinstance(error, NothingWithinStretchError):
+        return (
+            f"no part of the image is within --max-stretch {error.max_stretch:g} (the "
+            "vanishing line covers it); raise --max-stretch or use --bbox frontal"
+        )
+    if isinstance(error, MissingDistanceError):
+        return "--px-per-unit needs the camera-to-wall 'distance' of the image"
+    if isinstance(error, ImageFormatError):
+        if not error.alternatives:
+            return str(error)
+        return f"{error.reason}; use --ext {' or --ext '.join(error.alternatives)}"
+    return None
+
+
 class TableWriteError(Exception):
     """The table could not be written (a full disk, say): the run cannot keep its record."""
 
@@ -297,6 +323,8 @@ def rectify(
         extension = canonical_extension(ext)
         try:
             check_writable(extension, "uint8", 4 if alpha else 3)
+        except ImageFormatError as error:
+            raise click.BadParameter(error.reason, param_hint="'--ext'") from None
         except ImageError as error:
             raise click.BadParameter(str(error).split(";")[0], param_hint="'--ext'") from None
     table_format = "csv"
@@ -336,7 +364,7 @@ def rectify(
         bbox=box, scale=scale or 1.0, px_per_unit=px_per_unit, max_stretch=max_stretch,
         max_pixels=pixel_limit, interpolation=interpolation, fill=fill, alpha=alpha,
         quality=quality, overwrite=overwrite, dry_run=dry_run,
-        max_input_pixels=input_pixel_limit, root=outdir,
+        max_input_pixels=input_pixel_limit, root=outdir, describe=describe_error,
     )
     processes = jobs or os.cpu_count() or 1
     tqdm.monitor_interval = 0  # no monitor thread: workers may fork from this process
