@@ -70,7 +70,7 @@ def pan_tilt_towards(wall_x: float, wall_y: float, distance: float = 1.0) -> tup
 
 def wall_point_of_canonical_pixel(view: View, col: float, row: float) -> tuple[float, float]:
     """The wall point ``(wall_x, wall_y)`` (unit: ``view.distance``, or ``Zc = 1``) shown at a
-    pixel of the default canonical view (``gsrwt rectify`` without --bbox or --scale).
+    pixel of the default canonical view (what ``gsrwt rectify`` writes unless told otherwise).
 
     That view shows the fixation point at the principal point, one pixel per ``Zc/f`` wall
     units, upright (Eq. 4.25 and spec section 5): a vector measured on it, times ``Zc/f``, is

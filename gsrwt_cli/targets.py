@@ -21,39 +21,38 @@ from .outputs import OutsideOutputError, check_inside, write_atomic
 
 
 class TargetError(ValueError):
-    """A file or directory a command would write cannot be written; ``path`` names it."""
+    """A file or directory a command would write cannot be written; ``path`` names it, and
+    ``reason`` says why (the class's own reason unless given: the system's words)."""
 
-    def __init__(self, path: Path, reason: str) -> None:
-        super().__init__(f"{path}: {reason}")
-        self.path, self.reason = path, reason
+    default_reason = "cannot be written"
+
+    def __init__(self, path: Path, reason: str | None = None) -> None:
+        self.path, self.reason = path, reason or self.default_reason
+        super().__init__(f"{path}: {self.reason}")
 
 
 class ExistingOutputError(TargetError):
     """The output exists, and replacing it was not asked for."""
 
-    def __init__(self, path: Path) -> None:
-        super().__init__(path, "exists")
+    default_reason = "exists"
 
 
 class InputOverwriteError(TargetError):
     """The output is one of the command's inputs."""
 
-    def __init__(self, path: Path) -> None:
-        super().__init__(path, "would overwrite an input")
+    default_reason = "would overwrite an input"
 
 
 class NotADirectoryTargetError(TargetError):
     """An output directory exists and is not a directory."""
 
-    def __init__(self, path: Path) -> None:
-        super().__init__(path, "exists and is not a directory")
+    default_reason = "exists and is not a directory"
 
 
 class DirectoryTargetError(TargetError):
     """An output file is a directory."""
 
-    def __init__(self, path: Path) -> None:
-        super().__init__(path, "is a directory")
+    default_reason = "is a directory"
 
 
 class UncreatableDirectoryError(TargetError):

@@ -14,7 +14,13 @@ from hypothesis import strategies as st
 
 from gsrwt_cli import View
 from gsrwt_cli.cli import main
-from gsrwt_cli.gaze import fixation_point, pan_tilt_towards, wall_point_of_canonical_pixel
+from gsrwt_cli.gaze import (
+    GazeTargetError,
+    fixation_point,
+    gaze_at,
+    pan_tilt_towards,
+    wall_point_of_canonical_pixel,
+)
 
 
 def rows(result):
@@ -83,3 +89,16 @@ def test_gaze_cli_centres_a_canonical_pixel_and_reports_the_fixation():
     missing = runner.invoke(main, ["gaze", "--pan", "1", "--tilt", "1", "--focal", "100",
                                    "--to-vector", "1,1"])
     assert missing.exit_code == 2 and "--to-vector needs --distance" in missing.stderr
+
+
+def test_a_target_the_view_cannot_place_is_a_typed_error_without_options():
+    view = View(15, 30, 280)
+    with pytest.raises(GazeTargetError) as pixel:
+        gaze_at(view, pixel=(1.0, 2.0))
+    with pytest.raises(GazeTargetError) as vector:
+        gaze_at(view, vector=(1.0, 2.0))
+    assert (pixel.value.target, pixel.value.missing) == ("pixel", ("cx", "cy"))
+    assert (vector.value.target, vector.value.missing) == ("vector", ("distance",))
+    assert "--" not in str(pixel.value) + str(vector.value)
+    here = gaze_at(view)
+    assert (here.pan_deg, here.tilt_deg) == pytest.approx((15, 30))

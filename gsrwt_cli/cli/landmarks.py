@@ -32,6 +32,7 @@ from ..tables import TableWriter
 from ..targets import Drawings
 from .options import (
     InputError,
+    draw_option,
     edge_threshold_option,
     format_option,
     images_argument,
@@ -118,8 +119,7 @@ def _readable(
               help="Orientation sampling, degrees.")
 @click.option("--min-votes", type=click.IntRange(min=1), default=DEFAULT_MIN_VOTES,
               show_default=True, help="Votes a line needs.")
-@click.option("--draw", type=click.Path(path_type=Path, file_okay=False),
-              help="Write the frontal views with the lines drawn into this directory.")
+@draw_option("lines")
 @format_option
 def lines(images: tuple[Path, ...], sidecar: Path | None, edge_threshold: float,
           theta_step: float, min_votes: int, draw: Path | None, fmt: str | None,
@@ -183,8 +183,7 @@ def _parse_scales(text: str, steps: int) -> list[float]:
 @click.option("--max-matches", type=click.IntRange(min=1), default=1, show_default=True,
               help="Matches per image and template.")
 @edge_threshold_option
-@click.option("--draw", type=click.Path(path_type=Path, file_okay=False),
-              help="Write the frontal views with the matches drawn into this directory.")
+@draw_option("matches")
 @format_option
 def match(images: tuple[Path, ...], templates: tuple[Path, ...], sidecar: Path | None,
           scales: str, scale_steps: int, min_score: float, max_matches: int,

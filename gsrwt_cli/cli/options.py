@@ -140,6 +140,13 @@ def images_argument(func: F) -> F:
                           metavar="IMAGE...")(func)
 
 
+def draw_option(what: str) -> Callable[[F], F]:
+    """``--draw DIR`` of the landmark commands: the frontal views with ``what`` drawn in."""
+    return click.option("--draw", type=click.Path(path_type=Path, file_okay=False),
+                        help=f"Write the frontal views with the {what} drawn into this "
+                             "directory.")
+
+
 def raw_views_sidecar_option(func: F) -> F:
     """``--sidecar`` of the landmark commands: parameters of views to rectify first."""
     return click.option("--sidecar", type=click.Path(path_type=Path, dir_okay=False),
