@@ -8,8 +8,40 @@ from the foot of the perpendicular from the camera to the wall, in the unit of t
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 from .camera import View
+from .geometry import gsrwt_parameters
+
+
+class GazeTargetError(ValueError):
+    """A target the view cannot place on the wall: a ``target`` ("pixel" or "vector") needs
+    the ``missing`` fields of the view."""
+
+    def __init__(self, target: str, missing: tuple[str, ...], reason: str) -> None:
+        super().__init__(f"a target {target} needs {reason}")
+        self.target, self.missing = target, missing
+
+
+@dataclass(frozen=True)
+class Gaze:
+    """Pan and tilt that put the wall point ``(wall_x, wall_y)`` on the optical axis."""
+
+    pan_deg: float
+    tilt_deg: float
+    wall_x: float
+    wall_y: float
+
+
+@dataclass(frozen=True)
+class TrackStep:
+    """One position of the robot (Table 5.2): the aim at the object and the view it gives."""
+
+    position: float
+    pan_deg: float
+    tilt_deg: float
+    theta_deg: float
+    foreshortening: float
 
 
 def fixation_point(pan_deg: float, tilt_deg: float, distance: float = 1.0) -> tuple[float, float]:
@@ -38,7 +70,7 @@ def pan_tilt_towards(wall_x: float, wall_y: float, distance: float = 1.0) -> tup
 
 def wall_point_of_canonical_pixel(view: View, col: float, row: float) -> tuple[float, float]:
     """The wall point ``(wall_x, wall_y)`` (unit: ``view.distance``, or ``Zc = 1``) shown at a
-    pixel of the default canonical view (``gsrwt rectify`` without --bbox or --scale).
+    pixel of the default canonical view (what ``gsrwt rectify`` writes unless told otherwise).
 
     That view shows the fixation point at the principal point, one pixel per ``Zc/f`` wall
     units, upright (Eq. 4.25 and spec section 5): a vector measured on it, times ``Zc/f``, is
@@ -48,14 +80,6 @@ def wall_point_of_canonical_pixel(view: View, col: float, row: float) -> tuple[f
     fix_x, fix_y = fixation_point(view.pan, view.tilt, distance)
     unit = distance / view.focal
     return fix_x + (col - view.cx) * unit, fix_y + (view.cy - row) * unit
-
-
-def canonical_pixel_of_wall_point(view: View, wall_x: float, wall_y: float) -> tuple[float, float]:
-    """Inverse of :func:`wall_point_of_canonical_pixel`."""
-    distance = view.distance or 1.0
-    fix_x, fix_y = fixation_point(view.pan, view.tilt, distance)
-    unit = distance / view.focal
-    return view.cx + (wall_x - fix_x) / unit, view.cy - (wall_y - fix_y) / unit
 
 
 def track(
@@ -69,3 +93,44 @@ def track(
     """
     ahead = object_position - robot_position
     return pan_tilt_towards(-ahead, height, distance)
+
+
+def gaze_at(view: View, pixel: tuple[float, float] | None = None,
+            vector: tuple[float, float] | None = None) -> Gaze:
+    """The gaze that centres a target: a ``pixel`` ``(col, row)`` of the view's default
+    canonical view, or a ``vector`` ``(right, up)`` on the wall from the current fixation (in
+    the unit of ``view.distance``); with neither, the current fixation itself.
+
+    Raises :class:`GazeTargetError` when the view lacks what the target needs (a principal
+    point for a pixel, a distance for a vector) and :class:`ValueError` for both targets.
+    """
+    if pixel is not None and vector is not None:
+        raise ValueError("give a target pixel or a target vector, not both")
+    distance = view.distance or 1.0
+    if pixel is not None:
+        if not view.has_principal_point:
+            raise GazeTargetError("pixel", ("cx", "cy"),
+                                  "the principal point (cx, cy, or the image size)")
+        wall_x, wall_y = wall_point_of_canonical_pixel(view, *pixel)
+    elif vector is not None:
+        if view.distance is None:
+            raise GazeTargetError("vector", ("distance",), "the distance (the vector's unit)")
+        fix_x, fix_y = fixation_point(view.pan, view.tilt, distance)
+        wall_x, wall_y = fix_x + vector[0], fix_y + vector[1]
+    else:
+        wall_x, wall_y = fixation_point(view.pan, view.tilt, distance)
+    pan, tilt = pan_tilt_towards(wall_x, wall_y, distance)
+    return Gaze(pan, tilt, wall_x, wall_y)
+
+
+def track_steps(distance: float, height: float, object_position: float,
+                robot_positions: list[float]) -> list[TrackStep]:
+    """:func:`track` at each of ``robot_positions``, with the theta and foreshortening of the
+    view it gives (thesis Sec. 5.2.3, Table 5.2)."""
+    steps = []
+    for position in robot_positions:
+        pan, tilt = track(distance, height, object_position, position)
+        parameters = gsrwt_parameters(pan, tilt, 1.0)  # theta does not depend on the focal
+        steps.append(TrackStep(position, pan, tilt, parameters.theta_deg,
+                               parameters.foreshortening))
+    return steps

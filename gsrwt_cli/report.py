@@ -2,9 +2,17 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from .camera import View
+from .landmarks import Line, Match
+
+#: Maps ``(N, 2)`` frontal-view pixels to the original image's, or gives None (no map).
+ToSource = Callable[[np.ndarray], "np.ndarray | None"]
 
 #: Columns of ``gsrwt params`` (a public contract, documented in the README).
 PARAMS_COLUMNS = (
@@ -57,4 +65,38 @@ def params_row(view: View, image: str | None = None) -> dict[str, Any]:
         line = view.vanishing_line_pixels()
         if line is not None:
             row.update(vl_a=float(line[0]), vl_b=float(line[1]), vl_c=float(line[2]))
+    return row
+
+
+#: Columns of ``gsrwt gaze`` and ``gsrwt track``.
+GAZE_COLUMNS = ("pan_deg", "tilt_deg", "wall_x", "wall_y")
+TRACK_COLUMNS = ("position", "pan_deg", "tilt_deg", "theta_deg", "foreshortening")
+
+#: Columns of ``gsrwt lines`` and ``gsrwt match``.
+LINES_COLUMNS = ("image", "rho", "theta_deg", "votes", "x1", "y1", "x2", "y2",
+                 "x1_src", "y1_src", "x2_src", "y2_src")
+MATCH_COLUMNS = ("image", "template", "x", "y", "scale", "votes", "score", "x_src", "y_src")
+
+
+def line_row(image: Path, line: Line, to_source: ToSource) -> dict[str, Any]:
+    """The ``gsrwt lines`` row of a line found on the frontal view of ``image``; the ``*_src``
+    end points when ``to_source`` maps frontal pixels back to the image's."""
+    row: dict[str, Any] = {"image": str(image), "rho": line.rho, "theta_deg": line.theta_deg,
+                           "votes": line.votes, "x1": line.x1, "y1": line.y1, "x2": line.x2,
+                           "y2": line.y2}
+    source = to_source(np.array([[line.x1, line.y1], [line.x2, line.y2]]))
+    if source is not None:
+        row.update(x1_src=source[0, 0], y1_src=source[0, 1], x2_src=source[1, 0],
+                   y2_src=source[1, 1])
+    return row
+
+
+def match_row(image: Path, template: str, match: Match, to_source: ToSource) -> dict[str, Any]:
+    """The ``gsrwt match`` row of a ``template`` found on the frontal view of ``image``."""
+    row: dict[str, Any] = {"image": str(image), "template": template, "x": match.x,
+                           "y": match.y, "scale": match.scale, "votes": match.votes,
+                           "score": match.score}
+    source = to_source(np.array([[match.x, match.y]]))
+    if source is not None:
+        row.update(x_src=source[0, 0], y_src=source[0, 1])
     return row

@@ -32,6 +32,10 @@ from gsrwt_cli.batch import ImageWorker, Job, Settings
 from gsrwt_cli.outputs import TEMPORARY_PATTERN
 from gsrwt_cli.rectify import rectify_image
 
+#: Slow (out of the quick loop, ``pytest -m "not slow"``): the suite runs the command in
+#: subprocesses, kills them and fills disks.
+pytestmark = pytest.mark.slow
+
 POSE = ("--pan", "20", "--tilt", "10", "--focal", "900")
 
 

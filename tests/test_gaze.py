@@ -15,8 +15,9 @@ from hypothesis import strategies as st
 from gsrwt_cli import View
 from gsrwt_cli.cli import main
 from gsrwt_cli.gaze import (
-    canonical_pixel_of_wall_point,
+    GazeTargetError,
     fixation_point,
+    gaze_at,
     pan_tilt_towards,
     wall_point_of_canonical_pixel,
 )
@@ -61,8 +62,12 @@ def test_gaze_round_trip(pan, tilt, focal, distance, col, row):
     assert (hit_right, hit_up) == pytest.approx(wall, abs=1e-9 * (1 + np.abs(wall).max()))
     assert fixation_point(new_pan, new_tilt, distance) == pytest.approx(wall, rel=1e-9,
                                                                          abs=1e-9)
-    # ...which is the target pixel of the original canonical view, within 0.01 px.
-    back = canonical_pixel_of_wall_point(view, *fixation_point(new_pan, new_tilt, distance))
+    # ...which is the target pixel of the original canonical view (the old fixation at the
+    # principal point, one pixel per distance/focal wall units, upright), within 0.01 px.
+    old_x, old_y = fixation_point(pan, tilt, distance)
+    new_x, new_y = fixation_point(new_pan, new_tilt, distance)
+    back = (view.cx + (new_x - old_x) * focal / distance,
+            view.cy - (new_y - old_y) * focal / distance)
     assert back == pytest.approx((col, row), abs=0.01)
 
 
@@ -84,3 +89,16 @@ def test_gaze_cli_centres_a_canonical_pixel_and_reports_the_fixation():
     missing = runner.invoke(main, ["gaze", "--pan", "1", "--tilt", "1", "--focal", "100",
                                    "--to-vector", "1,1"])
     assert missing.exit_code == 2 and "--to-vector needs --distance" in missing.stderr
+
+
+def test_a_target_the_view_cannot_place_is_a_typed_error_without_options():
+    view = View(15, 30, 280)
+    with pytest.raises(GazeTargetError) as pixel:
+        gaze_at(view, pixel=(1.0, 2.0))
+    with pytest.raises(GazeTargetError) as vector:
+        gaze_at(view, vector=(1.0, 2.0))
+    assert (pixel.value.target, pixel.value.missing) == ("pixel", ("cx", "cy"))
+    assert (vector.value.target, vector.value.missing) == ("vector", ("distance",))
+    assert "--" not in str(pixel.value) + str(vector.value)
+    here = gaze_at(view)
+    assert (here.pan_deg, here.tilt_deg) == pytest.approx((15, 30))

@@ -23,6 +23,10 @@ from conftest import run_gsrwt
 
 from gsrwt_cli.cli import main
 
+#: Slow (out of the quick loop, ``pytest -m "not slow"``): every test runs the installed
+#: command in a subprocess.
+pytestmark = pytest.mark.slow
+
 ROOT = Path(__file__).resolve().parent.parent
 #: Parameters that name what a command writes (the rest of the paths are read).
 OUTPUT_PARAMETERS = {"output", "outdir", "draw", "out_sidecar", "table_path"}

@@ -102,6 +102,7 @@ def template_truth(name: str, row: dict) -> tuple[np.ndarray, bool, bool]:
     return centre, bool(inside.all()), bool(inside.any())
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("part", ["knob", "window"])
 def test_one_template_finds_door_parts_in_every_rectified_view(part):
     rows = run("match", *[str(SAMPLES / "views" / n) for n in sorted(VIEWS)], "--template",

@@ -67,6 +67,7 @@ def test_version():
     assert result.exit_code == 0 and result.output.strip() == f"gsrwt, version {__version__}"
 
 
+@pytest.mark.slow
 def test_every_readme_command_runs(tmp_path):
     """Run them all, in order, in a copy of the sample data, as a user would from the root."""
     shutil.copytree(ROOT / "sample_data", tmp_path / "sample_data")
@@ -96,6 +97,7 @@ def test_every_readme_command_runs(tmp_path):
     assert len(list((tmp_path / "from-stdin" / "sample_data" / "views").glob("*.png"))) == 4
 
 
+@pytest.mark.slow
 def test_development_commands_run(tmp_path):
     """The README's development block: benchmarks (small), sample regeneration, lint."""
     (block,) = [b for b in sh_blocks(README) if any("make_samples" in line for line in b)]

@@ -79,6 +79,7 @@ def rendered(tmp_path_factory):
     return folder, truth
 
 
+@pytest.mark.slow
 def test_rectified_views_match_the_frontal_pinhole_view(rendered, tmp_path, gsrwt):
     folder, truth = rendered
     before = snapshot(folder)
@@ -208,6 +209,7 @@ def test_bad_images_are_reported_and_the_batch_goes_on(messy, tmp_path, gsrwt, r
     assert snapshot(messy) == before
 
 
+@pytest.mark.slow
 def test_vanishing_line_across_the_image_both_bbox_modes(tmp_path):
     folder = tmp_path / "in"
     folder.mkdir()
@@ -508,6 +510,7 @@ def run_on_terminal(args: list[str]) -> str:
     return output.decode(errors="replace")
 
 
+@pytest.mark.slow
 def test_progress_bar_only_on_a_terminal_and_not_with_quiet(tmp_path, gsrwt):
     folder = tmp_path / "in"
     folder.mkdir()

@@ -11,8 +11,10 @@ from conftest import psnr, render_view, smooth_texture
 
 from gsrwt_cli import View
 from gsrwt_cli.cli import main
+from gsrwt_cli.render import plan_one_view, plan_views, render_views, write_views_sidecar
 from gsrwt_cli.render import render_view as gsrwt_render_view
 from gsrwt_cli.sidecar import load_sidecar
+from gsrwt_cli.targets import DirectoryTargetError, ExistingOutputError, InputOverwriteError
 
 TEXTURE = smooth_texture(900, 1200, seed=5)
 
@@ -79,3 +81,39 @@ def test_render_many_views_from_a_sidecar(tmp_path):
     records = {r.image: r.view() for r in load_sidecar(tmp_path / "r" / "views.yaml").records}
     assert records["c.jpg"].pan == -30 and records["c.jpg"].width == 640
     assert cv2.imread(str(tmp_path / "r" / "c.jpg")).shape == (480, 640, 3)
+
+
+def test_the_core_plans_checks_and_renders_views_without_naming_options(tmp_path):
+    """The library's render batch: typed errors carrying the path, no command-line words."""
+    texture = TEXTURE[:300, :400]
+    values = {"pan": 10, "tilt": 5, "focal": 200, "width": 80, "height": 60}
+    plan = plan_one_view(values, tmp_path / "v.png")
+    assert plan.sidecar == tmp_path / "v.yaml" and plan.root is None
+    (tmp_path / "v.png").write_bytes(b"old")
+    with pytest.raises(ExistingOutputError) as existing:
+        render_views(texture, plan)
+    assert existing.value.path == tmp_path / "v.png" and "--" not in str(existing.value)
+    with pytest.raises(InputOverwriteError):
+        render_views(texture, plan, inputs=[tmp_path / "v.png"], overwrite=True)
+    (result,) = render_views(texture, plan, overwrite=True)
+    assert result.error is None and cv2.imread(str(tmp_path / "v.png")).shape == (60, 80, 3)
+    write_views_sidecar(plan.sidecar, [result.job])
+    (record,) = load_sidecar(plan.sidecar).records
+    assert record.view() == result.job.view
+    with pytest.raises(DirectoryTargetError):
+        plan_one_view(values, tmp_path)
+
+    records = load_sidecar(_sidecar(tmp_path, "image,pan,tilt,focal\nok.png,1,2,200\n"
+                                              "../out.png,1,2,200\nbad.png,1,95,200\n")).records
+    many = plan_views(records, tmp_path / "many", {"width": 80, "height": 60})
+    assert [job.name for job in many.jobs] == ["ok.png"]
+    assert [(error.field, "--" in str(error)) for error in many.errors] == [("image", False),
+                                                                             ("tilt", False)]
+    (result,) = render_views(texture, many)
+    assert result.error is None and (tmp_path / "many" / "ok.png").is_file()
+
+
+def _sidecar(directory, text):
+    path = directory / "views.csv"
+    path.write_text(text)
+    return path

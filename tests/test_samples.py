@@ -44,6 +44,7 @@ def test_sample_views_are_what_render_makes_of_the_texture(tmp_path):
         assert np.abs(ours - committed).max() <= 1, row["image"]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("row", VIEWS, ids=[row["image"] for row in VIEWS])
 def test_rectified_samples_give_back_the_texture(row, tmp_path, gsrwt):
     result = gsrwt("rectify", str(SAMPLES / "views" / row["image"]), "--sidecar",

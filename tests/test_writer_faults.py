@@ -29,6 +29,10 @@ import pytest
 import yaml
 from conftest import GSRWT, run_gsrwt, smooth_texture
 
+#: Slow (out of the quick loop, ``pytest -m "not slow"``): the suite runs the command in
+#: subprocesses.
+pytestmark = pytest.mark.slow
+
 ROOT = Path(__file__).resolve().parent.parent
 VIEWS = ROOT / "sample_data" / "views"
 KNOB = ROOT / "sample_data" / "templates" / "knob.png"

@@ -3,33 +3,28 @@
 from __future__ import annotations
 
 import sys
+from dataclasses import asdict
 from typing import Any
 
 import click
 
-from ..gaze import (
-    fixation_point,
-    pan_tilt_towards,
-    wall_point_of_canonical_pixel,
-)
-from ..gaze import (
-    track as track_object,
-)
-from ..geometry import gsrwt_parameters
+from ..gaze import GazeTargetError, gaze_at, track_steps
 from ..messages import quote
-from ..sidecar import RecordError, view_from_values
+from ..report import GAZE_COLUMNS, TRACK_COLUMNS
 from ..tables import write_table
 from .options import (
     InputError,
     format_option,
-    option_message,
     resolve_format,
     view_defaults,
+    view_from_options,
     view_options,
 )
 
-GAZE_COLUMNS = ("pan_deg", "tilt_deg", "wall_x", "wall_y")
-TRACK_COLUMNS = ("position", "pan_deg", "tilt_deg", "theta_deg", "foreshortening")
+#: The option that gives each kind of target, and the options a view needs for it.
+TARGET_OPTIONS = {"pixel": "--to-pixel", "vector": "--to-vector"}
+NEEDED_OPTIONS = {"pixel": "the image size (--width --height) or --cx --cy",
+                  "vector": "--distance (the vector's unit)"}
 
 
 def _pair(name: str, text: str | None) -> tuple[float, float] | None:
@@ -65,24 +60,12 @@ def gaze(to_pixel: str | None, to_vector: str | None, fmt: str | None, **kwargs:
     pixel, vector = _pair("--to-pixel", to_pixel), _pair("--to-vector", to_vector)
     if pixel is not None and vector is not None:
         raise click.UsageError("give --to-pixel or --to-vector, not both")
+    view = view_from_options(view_defaults(kwargs))
     try:
-        view = view_from_values(view_defaults(kwargs), "options")
-    except RecordError as error:
-        raise InputError(option_message(error)) from None
-    distance = view.distance or 1.0
-    if pixel is not None:
-        if not view.has_principal_point:
-            raise InputError("--to-pixel needs the image size (--width --height) or --cx --cy")
-        wall_x, wall_y = wall_point_of_canonical_pixel(view, *pixel)
-    elif vector is not None:
-        if view.distance is None:
-            raise InputError("--to-vector needs --distance (the vector's unit)")
-        fix_x, fix_y = fixation_point(view.pan, view.tilt, distance)
-        wall_x, wall_y = fix_x + vector[0], fix_y + vector[1]
-    else:
-        wall_x, wall_y = fixation_point(view.pan, view.tilt, distance)
-    pan, tilt = pan_tilt_towards(wall_x, wall_y, distance)
-    row = {"pan_deg": pan, "tilt_deg": tilt, "wall_x": wall_x, "wall_y": wall_y}
+        row = asdict(gaze_at(view, pixel, vector))
+    except GazeTargetError as error:
+        raise InputError(f"{TARGET_OPTIONS[error.target]} needs "
+                         f"{NEEDED_OPTIONS[error.target]}") from None
     write_table(sys.stdout, GAZE_COLUMNS, [row], resolve_format(fmt))
 
 
@@ -115,11 +98,6 @@ def track(distance: float, height: float, object_position: float, positions: str
     except ValueError:
         raise click.BadParameter(f"expected numbers separated by commas, got {quote(positions)}",
                                  param_hint="'--positions'") from None
-    rows = []
-    for position in points:
-        pan, tilt = track_object(distance, height, object_position, position)
-        parameters = gsrwt_parameters(pan, tilt, 1.0)
-        rows.append({"position": position, "pan_deg": pan, "tilt_deg": tilt,
-                     "theta_deg": parameters.theta_deg,
-                     "foreshortening": parameters.foreshortening})
+    steps = track_steps(distance, height, object_position, points)
+    rows = [asdict(step) for step in steps]
     write_table(sys.stdout, TRACK_COLUMNS, rows, resolve_format(fmt))

@@ -3,46 +3,46 @@
 from __future__ import annotations
 
 import math
-import os
 import sys
 from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import Any
 
 import click
-import cv2
 import numpy as np
 
 from ..batch import sources_from_directory
 from ..canonical import CanonicalView, canonical_views
-from ..imaging import ImageError, encode_image, read_image
+from ..imaging import ImageError, read_image
 from ..landmarks import (
-    DEFAULT_EDGE_THRESHOLD,
     DEFAULT_MIN_VOTES,
     DEFAULT_THETA_STEP_DEG,
     Template,
     build_template,
+    colour8,
+    grey8,
     hough_lines,
     match_template,
 )
+from ..landmarks.drawing import draw_lines, draw_matches
 from ..messages import quote
-from ..outputs import OutsideOutputError, write_atomic
+from ..report import LINES_COLUMNS, MATCH_COLUMNS, line_row, match_row
 from ..sidecar import SidecarError, load_sidecar
 from ..tables import TableWriter
+from ..targets import Drawings
 from .options import (
     InputError,
+    draw_option,
+    edge_threshold_option,
     format_option,
+    images_argument,
     make_output_directory,
-    output_target,
+    raw_views_sidecar_option,
     report_error,
     resolve_format,
     view_defaults,
     view_options,
 )
-
-LINES_COLUMNS = ("image", "rho", "theta_deg", "votes", "x1", "y1", "x2", "y2",
-                 "x1_src", "y1_src", "x2_src", "y2_src")
-MATCH_COLUMNS = ("image", "template", "x", "y", "scale", "votes", "score", "x_src", "y_src")
 
 
 def _image_paths(images: tuple[Path, ...]) -> list[Path]:
@@ -65,42 +65,6 @@ def _sources(paths: list[Path], sidecar: Path | None, view_kwargs: dict[str, Any
     except SidecarError as error:
         raise InputError(str(error)) from None
     return canonical_views(paths, loaded, view_defaults(view_kwargs))
-
-
-class Drawings:
-    """Where ``--draw DIR`` puts the picture of each image: ``DIR/STEM.png``, inside DIR.
-
-    A picture is refused (an error for that image, the others still drawn) when its file
-    would lie outside DIR (a symbolic link in DIR leading out), would replace an input
-    (an image, a template, the sidecar), or would replace the picture of an earlier image of
-    the same run: ``a/door.jpg`` and ``b/door.png`` both draw to ``DIR/door.png``, and the
-    second is refused rather than silently given another name or drawn over the first.
-    """
-
-    def __init__(self, directory: Path, inputs: Iterable[Path]) -> None:
-        self.directory = directory
-        self.protected = {os.path.realpath(path) for path in inputs}
-        self.drawn: dict[str, Path] = {}  # real path of a picture -> the image it shows
-
-    def target(self, image: Path) -> Path:
-        """The picture's file for ``image``, or :class:`ValueError` saying why there is none."""
-        target = self.directory / (image.stem + ".png")
-        try:
-            output_target(self.directory, target.name)
-        except OutsideOutputError as error:
-            raise ValueError(f"its picture {target} {error}") from None
-        real = os.path.realpath(target)
-        if real in self.protected:
-            raise ValueError(f"its picture {target} would overwrite an input")
-        if real in self.drawn:
-            raise ValueError(f"its picture {target} would replace the picture of "
-                             f"{self.drawn[real]} (same name); draw them in separate runs")
-        self.drawn[real] = image
-        return target
-
-    def save(self, target: Path, overlay: np.ndarray) -> None:
-        """Write the picture whole, inside the directory (or raise OSError, ValueError)."""
-        write_atomic(target, encode_image(overlay, ".png"), root=self.directory)
 
 
 def _start_drawings(draw: Path | None, inputs: list[Path]) -> Drawings | None:
@@ -133,18 +97,6 @@ def _save_drawing(drawings: Drawings, target: Path, view: CanonicalView,
     return True
 
 
-def _colour(pixels: np.ndarray) -> np.ndarray:
-    if pixels.dtype != np.uint8:
-        pixels = cv2.convertScaleAbs(pixels, alpha=255.0 / float(np.iinfo(pixels.dtype).max))
-    if pixels.ndim == 2:
-        return cv2.cvtColor(pixels, cv2.COLOR_GRAY2BGR)
-    return pixels[..., :3].copy()
-
-
-def _grey8(pixels: np.ndarray) -> np.ndarray:
-    return cv2.cvtColor(_colour(pixels), cv2.COLOR_BGR2GRAY)
-
-
 def _readable(
     views: Iterable[CanonicalView | tuple[Path, str]], failures: list[Path]
 ) -> Iterator[CanonicalView]:
@@ -159,20 +111,15 @@ def _readable(
 
 
 @click.command()
-@click.argument("images", nargs=-1, required=True, type=click.Path(path_type=Path),
-                metavar="IMAGE...")
-@click.option("--sidecar", type=click.Path(path_type=Path, dir_okay=False),
-              help="Parameters of raw views (as for rectify); images without are taken as "
-                   "frontal already.")
+@images_argument
+@raw_views_sidecar_option
 @view_options
-@click.option("--edge-threshold", type=float, default=DEFAULT_EDGE_THRESHOLD, show_default=True,
-              help="Sobel magnitude of an edge pixel.")
+@edge_threshold_option
 @click.option("--theta-step", type=float, default=DEFAULT_THETA_STEP_DEG, show_default=True,
               help="Orientation sampling, degrees.")
 @click.option("--min-votes", type=click.IntRange(min=1), default=DEFAULT_MIN_VOTES,
               show_default=True, help="Votes a line needs.")
-@click.option("--draw", type=click.Path(path_type=Path, file_okay=False),
-              help="Write the frontal views with the lines drawn into this directory.")
+@draw_option("lines")
 @format_option
 def lines(images: tuple[Path, ...], sidecar: Path | None, edge_threshold: float,
           theta_step: float, min_votes: int, draw: Path | None, fmt: str | None,
@@ -195,21 +142,12 @@ def lines(images: tuple[Path, ...], sidecar: Path | None, edge_threshold: float,
         picture = _drawing_target(drawings, view)
         if drawings is not None and picture is None:
             failures.append(view.path)
-        found = hough_lines(_grey8(view.pixels), edge_threshold=edge_threshold,
+        found = hough_lines(grey8(view.pixels), edge_threshold=edge_threshold,
                             theta_step_deg=theta_step, min_votes=min_votes)
-        overlay = _colour(view.pixels) if picture is not None else None
-        for line in found:
-            row = {"image": str(view.path), "rho": line.rho, "theta_deg": line.theta_deg,
-                   "votes": line.votes, "x1": line.x1, "y1": line.y1, "x2": line.x2,
-                   "y2": line.y2}
-            source = view.to_source(np.array([[line.x1, line.y1], [line.x2, line.y2]]))
-            if source is not None:
-                row.update(x1_src=source[0, 0], y1_src=source[0, 1], x2_src=source[1, 0],
-                           y2_src=source[1, 1])
-            writer.write_row(row)
-            if overlay is not None:
-                ends = np.round([[line.x1, line.y1], [line.x2, line.y2]]).astype(int)
-                cv2.line(overlay, tuple(ends[0]), tuple(ends[1]), (0, 0, 255), 2, cv2.LINE_AA)
+        overlay = colour8(view.pixels) if picture is not None else None
+        writer.write_rows(line_row(view.path, line, view.to_source) for line in found)
+        if overlay is not None:
+            draw_lines(overlay, found)
         if picture is not None and not _save_drawing(drawings, picture, view, overlay):
             failures.append(view.path)
     writer.close()
@@ -230,14 +168,11 @@ def _parse_scales(text: str, steps: int) -> list[float]:
 
 
 @click.command()
-@click.argument("images", nargs=-1, required=True, type=click.Path(path_type=Path),
-                metavar="IMAGE...")
+@images_argument
 @click.option("--template", "templates", multiple=True, required=True,
               type=click.Path(path_type=Path, dir_okay=False),
               help="A frontal image of the object (its bounding box); repeatable.")
-@click.option("--sidecar", type=click.Path(path_type=Path, dir_okay=False),
-              help="Parameters of raw views (as for rectify); images without are taken as "
-                   "frontal already.")
+@raw_views_sidecar_option
 @view_options
 @click.option("--scales", default="0.9,1.1", show_default=True, metavar="MIN,MAX",
               help="Scale range to search around the expected scale 1 (the template at "
@@ -247,10 +182,8 @@ def _parse_scales(text: str, steps: int) -> list[float]:
               help="Fraction of the model's edge pixels a match must find.")
 @click.option("--max-matches", type=click.IntRange(min=1), default=1, show_default=True,
               help="Matches per image and template.")
-@click.option("--edge-threshold", type=float, default=DEFAULT_EDGE_THRESHOLD, show_default=True,
-              help="Sobel magnitude of an edge pixel.")
-@click.option("--draw", type=click.Path(path_type=Path, file_okay=False),
-              help="Write the frontal views with the matches drawn into this directory.")
+@edge_threshold_option
+@draw_option("matches")
 @format_option
 def match(images: tuple[Path, ...], templates: tuple[Path, ...], sidecar: Path | None,
           scales: str, scale_steps: int, min_score: float, max_matches: int,
@@ -272,7 +205,7 @@ def match(images: tuple[Path, ...], templates: tuple[Path, ...], sidecar: Path |
     models: list[tuple[Path, Template]] = []
     for path in templates:
         try:
-            models.append((path, build_template(_grey8(read_image(path)),
+            models.append((path, build_template(grey8(read_image(path)),
                                                 edge_threshold=edge_threshold)))
         except (ImageError, ValueError) as error:
             raise InputError(f"--template {path}: {error}") from None
@@ -285,23 +218,15 @@ def match(images: tuple[Path, ...], templates: tuple[Path, ...], sidecar: Path |
         picture = _drawing_target(drawings, view)
         if drawings is not None and picture is None:
             failures.append(view.path)
-        grey = _grey8(view.pixels)
-        overlay = _colour(view.pixels) if picture is not None else None
+        grey = grey8(view.pixels)
+        overlay = colour8(view.pixels) if picture is not None else None
         for path, model in models:
             found = match_template(grey, model, scales=scale_list, edge_threshold=edge_threshold,
                                    min_score=min_score, max_matches=max_matches)
-            for item in found:
-                row = {"image": str(view.path), "template": path.name, "x": item.x, "y": item.y,
-                       "scale": item.scale, "votes": item.votes, "score": item.score}
-                source = view.to_source(np.array([[item.x, item.y]]))
-                if source is not None:
-                    row.update(x_src=source[0, 0], y_src=source[0, 1])
-                writer.write_row(row)
-                if overlay is not None:
-                    half = np.array([model.width, model.height]) * item.scale / 2
-                    corner0 = np.round([item.x, item.y] - half).astype(int)
-                    corner1 = np.round([item.x, item.y] + half).astype(int)
-                    cv2.rectangle(overlay, tuple(corner0), tuple(corner1), (0, 0, 255), 2)
+            writer.write_rows(match_row(view.path, path.name, item, view.to_source)
+                              for item in found)
+            if overlay is not None:
+                draw_matches(overlay, model, found)
         if picture is not None and not _save_drawing(drawings, picture, view, overlay):
             failures.append(view.path)
     writer.close()

@@ -2,18 +2,28 @@
 
 from __future__ import annotations
 
-import os
 import sys
 from collections.abc import Callable
-from pathlib import Path, PurePosixPath
+from pathlib import Path
 from typing import Any, TypeVar
 
 import click
 
+from ..camera import View
+from ..imaging import INTERPOLATIONS
+from ..landmarks import DEFAULT_EDGE_THRESHOLD
 from ..messages import one_line
-from ..outputs import OutsideOutputError, check_inside
-from ..sidecar import RecordError
+from ..sidecar import VIEW_FIELDS, RecordError, view_from_values
 from ..tables import FORMATS
+from ..targets import (
+    DirectoryTargetError,
+    ExistingOutputError,
+    InputOverwriteError,
+    TargetError,
+    UncreatableDirectoryError,
+    UnwritableFileError,
+)
+from ..targets import make_output_directory as create_directory
 
 F = TypeVar("F", bound=Callable[..., Any])
 
@@ -32,42 +42,37 @@ def report_error(message: str) -> None:
     click.echo("Error: " + one_line(message), err=True)
 
 
-def _is_inside(real_root: str, real_path: str) -> bool:
-    return real_path == real_root or real_path.startswith(real_root.rstrip(os.sep) + os.sep)
+def view_from_options(values: dict[str, Any]) -> View:
+    """The one view the view options describe, or an :class:`InputError` naming the option."""
+    try:
+        return view_from_values(values, "options")
+    except RecordError as error:
+        raise InputError(option_message(error)) from None
 
 
-def output_target(root: Path, relative: PurePosixPath | str) -> Path:
-    """``root / relative``, a file a command may write, checked against the output rule.
-
-    ``relative`` must already be a checked relative name
-    (:func:`~gsrwt_cli.outputs.relative_output`, or a plain file name). Raises
-    :class:`~gsrwt_cli.outputs.OutsideOutputError` when writing there would leave ``root``:
-    a directory on the way is a symbolic link leading out of it, or the file itself is a
-    symbolic link to a file outside it (which we refuse rather than silently replace the link).
-    ``root`` should exist: nothing inside a missing directory can be a link.
-    """
-    target = root / relative
-    if not os.path.lexists(root):
-        return target
-    check_inside(root, target)
-    if os.path.islink(target):
-        pointed_to = os.path.realpath(target)
-        if not _is_inside(os.path.realpath(root), pointed_to):
-            raise OutsideOutputError(
-                f"is a symbolic link to {pointed_to}, outside the output {root}"
-            )
-    return target
+def target_message(error: TargetError, option: str | None = None) -> str:
+    """A refused output in the user's terms: ``option`` is the flag that named the file, if
+    one did; an existing file tells how to replace it."""
+    where = f"{option} {error.path}" if option else str(error.path)
+    if isinstance(error, ExistingOutputError):
+        return f"{where}: exists; use --overwrite to replace it"
+    if isinstance(error, InputOverwriteError):
+        return f"{where}: would overwrite an input; choose another output"
+    if isinstance(error, DirectoryTargetError):
+        return f"{where}: is a directory; give an image file name"
+    if isinstance(error, UncreatableDirectoryError):
+        return f"{where}: cannot create it ({error.reason})"
+    if isinstance(error, UnwritableFileError):
+        return f"{where}: cannot write it ({error.reason})"
+    return f"{where}: {error.reason}"
 
 
 def make_output_directory(option: str, directory: Path) -> None:
     """Create the output directory the user named, or stop with one line saying why not."""
-    if directory.exists() and not directory.is_dir():
-        raise InputError(f"{option} {directory}: exists and is not a directory")
     try:
-        directory.mkdir(parents=True, exist_ok=True)
-    except OSError as error:
-        raise InputError(f"{option} {directory}: cannot create it "
-                         f"({error.strerror or error})") from None
+        create_directory(directory)
+    except TargetError as error:
+        raise InputError(target_message(error, option)) from None
 
 
 def format_option(func: F) -> F:
@@ -89,24 +94,64 @@ def resolve_format(fmt: str | None) -> str:
     return "table" if sys.stdout.isatty() else "csv"
 
 
+#: The view options: type and help of each of :data:`~gsrwt_cli.sidecar.VIEW_FIELDS`.
+VIEW_OPTIONS: dict[str, tuple[type, str]] = {
+    "pan": (float, "Pan in degrees, positive turns left."),
+    "tilt": (float, "Tilt in degrees, positive tilts up."),
+    "focal": (float, "Focal length in pixels."),
+    "cx": (float, "Principal point column [default: image centre]."),
+    "cy": (float, "Principal point row [default: image centre]."),
+    "width": (int, "Image width in pixels."),
+    "height": (int, "Image height in pixels."),
+    "distance": (float, "Camera-to-wall distance (your unit)."),
+}
+
+
 def view_options(func: F) -> F:
-    """``--pan --tilt --focal --cx --cy --width --height --distance`` (one view, or defaults)."""
-    options = [
-        click.option("--pan", type=float, help="Pan in degrees, positive turns left."),
-        click.option("--tilt", type=float, help="Tilt in degrees, positive tilts up."),
-        click.option("--focal", type=float, help="Focal length in pixels."),
-        click.option("--cx", type=float, help="Principal point column [default: image centre]."),
-        click.option("--cy", type=float, help="Principal point row [default: image centre]."),
-        click.option("--width", type=int, help="Image width in pixels."),
-        click.option("--height", type=int, help="Image height in pixels."),
-        click.option("--distance", type=float, help="Camera-to-wall distance (your unit)."),
-    ]
-    for option in reversed(options):
-        func = option(func)
+    """``--pan --tilt --focal --cx --cy --width --height --distance`` (one view, or defaults):
+    one option for each field of :data:`~gsrwt_cli.sidecar.VIEW_FIELDS`, in its order."""
+    for name in reversed(VIEW_FIELDS):
+        kind, text = VIEW_OPTIONS[name]
+        func = click.option(f"--{name}", type=kind, help=text)(func)
     return func
 
 
-VIEW_OPTION_NAMES = ("pan", "tilt", "focal", "cx", "cy", "width", "height", "distance")
+def interpolation_option(func: F) -> F:
+    """``--interpolation``: how output pixels are sampled from the input."""
+    return click.option("--interpolation", type=click.Choice(tuple(INTERPOLATIONS)),
+                        default="linear", show_default=True)(func)
+
+
+def quality_option(func: F) -> F:
+    """``--quality``: of JPEG and WebP outputs."""
+    return click.option("--quality", type=click.IntRange(1, 100), default=95, show_default=True,
+                        help="JPEG and WebP quality.")(func)
+
+
+def edge_threshold_option(func: F) -> F:
+    """``--edge-threshold``: the Sobel magnitude of an edge pixel (lines, match)."""
+    return click.option("--edge-threshold", type=float, default=DEFAULT_EDGE_THRESHOLD,
+                        show_default=True, help="Sobel magnitude of an edge pixel.")(func)
+
+
+def images_argument(func: F) -> F:
+    """``IMAGE...``: image files and directories of images (lines, match)."""
+    return click.argument("images", nargs=-1, required=True, type=click.Path(path_type=Path),
+                          metavar="IMAGE...")(func)
+
+
+def draw_option(what: str) -> Callable[[F], F]:
+    """``--draw DIR`` of the landmark commands: the frontal views with ``what`` drawn in."""
+    return click.option("--draw", type=click.Path(path_type=Path, file_okay=False),
+                        help=f"Write the frontal views with the {what} drawn into this "
+                             "directory.")
+
+
+def raw_views_sidecar_option(func: F) -> F:
+    """``--sidecar`` of the landmark commands: parameters of views to rectify first."""
+    return click.option("--sidecar", type=click.Path(path_type=Path, dir_okay=False),
+                        help="Parameters of raw views (as for rectify); images without are "
+                             "taken as frontal already.")(func)
 
 
 def option_message(error: RecordError) -> str:
@@ -118,4 +163,4 @@ def option_message(error: RecordError) -> str:
 
 def view_defaults(kwargs: dict[str, Any]) -> dict[str, Any]:
     """The view options the user gave, as fallback values for sidecar records."""
-    return {name: kwargs[name] for name in VIEW_OPTION_NAMES if kwargs.get(name) is not None}
+    return {name: kwargs[name] for name in VIEW_FIELDS if kwargs.get(name) is not None}

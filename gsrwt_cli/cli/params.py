@@ -9,15 +9,15 @@ from typing import Any
 import click
 
 from ..report import PARAMS_COLUMNS, params_row
-from ..sidecar import RecordError, SidecarError, load_sidecar, view_from_values
+from ..sidecar import RecordError, SidecarError, load_sidecar
 from ..tables import write_table
 from .options import (
     InputError,
     format_option,
-    option_message,
     report_error,
     resolve_format,
     view_defaults,
+    view_from_options,
     view_options,
 )
 
@@ -43,11 +43,7 @@ def params(sidecar: Path | None, fmt: str | None, **kwargs: Any) -> None:
     defaults = view_defaults(kwargs)
     rows = []
     if sidecar is None:
-        try:
-            view = view_from_values(defaults, "options")
-        except RecordError as error:
-            raise InputError(option_message(error)) from None
-        rows.append(params_row(view))
+        rows.append(params_row(view_from_options(defaults)))
     else:
         try:
             records = load_sidecar(sidecar).records
