@@ -20,7 +20,12 @@ from .camera import View
 from .framing import render_map
 from .imaging import ImageError, check_writable, encode_image, warp_image
 from .messages import escape_controls, quote, shorten
-from .outputs import OutsideOutputError, relative_output, write_atomic
+from .outputs import (
+    OutsideOutputError,
+    relative_output,
+    remove_stale_temporaries,
+    write_atomic,
+)
 from .sidecar import VIEW_FIELDS, Record, RecordError, format_sidecar, view_from_values
 from .targets import (
     DirectoryTargetError,
@@ -163,6 +168,8 @@ def render_views(
     check_new_files([*(job.target for job in plan.jobs), plan.sidecar], inputs, overwrite)
     if plan.root is not None and plan.jobs:
         make_output_directory(plan.root)  # before the first write: the rule needs the root
+    for directory in {job.target.parent for job in plan.jobs} | {plan.sidecar.parent}:
+        remove_stale_temporaries(directory)  # what a killed earlier run left half-written
     return _render_each(texture, plan, interpolation, fill, alpha, quality)
 
 

@@ -17,7 +17,12 @@ from pathlib import Path, PurePosixPath
 import numpy as np
 
 from .imaging import encode_image
-from .outputs import OutsideOutputError, check_inside, write_atomic
+from .outputs import (
+    OutsideOutputError,
+    check_inside,
+    remove_stale_temporaries,
+    write_atomic,
+)
 
 
 class TargetError(ValueError):
@@ -110,6 +115,7 @@ def make_output_directory(directory: Path) -> None:
         directory.mkdir(parents=True, exist_ok=True)
     except OSError as error:
         raise UncreatableDirectoryError(directory, str(error.strerror or error)) from None
+    remove_stale_temporaries(directory)  # what a killed earlier run left half-written
 
 
 class Drawings:

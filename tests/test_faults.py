@@ -349,6 +349,26 @@ def test_stale_temporaries_of_dead_processes_are_removed_live_ones_kept(tmp_path
     assert not stale.exists() and live.exists() and user_file.exists()
 
 
+@pytest.mark.parametrize("command", ["render", "lines"])
+def test_render_and_draw_remove_stale_temporaries_too(tmp_path, command):
+    out = tmp_path / "out"
+    out.mkdir()
+    dead = subprocess.Popen([sys.executable, "-c", "pass"])
+    dead.wait()
+    stale = out / f".view.png.gsrwt-{dead.pid}-abc123.part"
+    stale.write_bytes(b"half")
+    texture = tmp_path / "wall.png"
+    cv2.imwrite(str(texture), smooth_texture(60, 80, 1))
+    if command == "render":
+        (tmp_path / "views.csv").write_text("image,pan,tilt,focal\nview.png,10,5,100\n")
+        args = ["render", str(texture), "--sidecar", str(tmp_path / "views.csv"), "-o", str(out)]
+    else:
+        args = ["lines", str(texture), "--draw", str(out)]
+    result = run_gsrwt(*args)
+    assert result.returncode == 0, result.stderr
+    assert not stale.exists() and stray_files(tmp_path) == []
+
+
 # --------------------------------------------------------------------------------------------
 # Disks: full, read-only; paths that are not directories
 # --------------------------------------------------------------------------------------------
