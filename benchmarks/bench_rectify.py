@@ -134,7 +134,7 @@ def worker_memory(folder: Path, out: Path) -> None:
     """Run one gsrwt worker's loop over all images; print idle and peak memory (KiB)."""
     from gsrwt_cli.batch import ImageWorker, Job, Settings
 
-    worker = ImageWorker(Settings(overwrite=True), opencv_threads=1)
+    worker = ImageWorker.in_own_process(Settings(overwrite=True), opencv_threads=1)
     idle = high_water_kib()
     for path, pan, tilt in _views(folder):
         job = Job(path, out / path.name, {"pan": pan, "tilt": tilt, "focal": FOCAL}, "bench")

@@ -29,6 +29,7 @@ from .imaging import (
     check_writable,
     encode_image,
     image_file_size,
+    keep_freed_memory,
     measure_image_file,
 )
 from .messages import one_line
@@ -275,6 +276,13 @@ class ImageWorker:
         if opencv_threads:
             cv2.setNumThreads(opencv_threads)
 
+    @classmethod
+    def in_own_process(cls, settings: Settings, opencv_threads: int = 0) -> ImageWorker:
+        """A worker for a process of its own, tuned as only such a process may be
+        (:func:`~gsrwt_cli.imaging.keep_freed_memory`)."""
+        keep_freed_memory()
+        return cls(settings, opencv_threads)
+
     def __call__(self, job: Job) -> dict[str, Any]:
         return process_job(job, self.settings, self.scratch)
 
@@ -380,7 +388,7 @@ def run_batch(
     worker_jobs = [index for index in range(len(jobs)) if index not in parent_jobs]
     if executor is None:
         executor = ProcessExecutor(
-            ImageWorker, (settings, 1 if processes > 1 else 0),
+            ImageWorker.in_own_process, (settings, 1 if processes > 1 else 0),
             max(1, min(processes, len(worker_jobs))),
             on_death=died_row, on_abandon=_remove_temporaries_of,
             context=context or worker_context(),

@@ -9,6 +9,7 @@ of a little over 400 lines.
 from __future__ import annotations
 
 import contextlib
+import ctypes
 import io
 import os
 import sys
@@ -58,6 +59,22 @@ def silence_opencv_logging() -> None:
     """
     with contextlib.suppress(AttributeError):  # older OpenCV builds lack cv2.utils.logging
         cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_SILENT)
+
+
+def keep_freed_memory() -> None:
+    """Let this process reuse freed image memory instead of returning it to the system.
+
+    OpenCV decodes every image into fresh memory; glibc serves such large blocks with
+    ``mmap`` and unmaps them when freed, so each image pays page faults for ~2 frames
+    (measured: 62 ms against 42 ms to decode a 12-megapixel JPEG). Raising glibc's mmap and
+    trim thresholds (``mallopt``) keeps the blocks in the heap for the next image. Process-
+    wide: for a batch worker's own process, not a library. No-op where glibc is absent.
+    """
+    with contextlib.suppress(OSError, AttributeError):
+        libc = ctypes.CDLL("libc.so.6")
+        m_trim_threshold, m_mmap_threshold = -1, -3
+        libc.mallopt(m_mmap_threshold, 1 << 30)
+        libc.mallopt(m_trim_threshold, 2**31 - 1)
 
 
 class ImageError(Exception):
