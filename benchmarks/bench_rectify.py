@@ -98,6 +98,10 @@ def _skimage_one(task: tuple[str, str, float, float]) -> None:
 
 
 def _init(threads: int) -> None:
+    """Each pool process as a gsrwt worker starts: its OpenCV threads and its heap."""
+    from gsrwt_cli.imaging import keep_freed_memory
+
+    keep_freed_memory()
     cv2.setNumThreads(threads)
 
 
