@@ -1,8 +1,10 @@
-"""The camera of one image: intrinsics (focal length, principal point, size) and pose (pan, tilt).
+"""The camera of one image: :class:`Intrinsics` (how rays become pixels) and :class:`Pose`
+(where it looks), composed in :class:`View` with the wall's distance.
 
-``View`` is the one object that carries what is known about how an image was taken; it grows
-with the camera model (roll, separate fx/fy, lens distortion) without changing its callers.
-Pixel coordinates are ``(col, row)`` with row growing downward and pixel centres at integers.
+``View`` is the one object that carries what is known about how an image was taken; the
+intrinsics hold ``fx, fy, cx, cy, skew``, the size and a slot for a lens model, the pose pan,
+tilt and roll (0 for now), so real cameras grow here without changing callers. Pixel
+coordinates are ``(col, row)`` with row growing downward and pixel centres at integers.
 """
 
 from __future__ import annotations
