@@ -83,6 +83,71 @@ def _check_range(name: str, value: float, low: float, high: float, unit: str) ->
         raise ViewError(name, f"{name} must be below {high:g}{unit}, got {value:.15g}")
 
 
+#: Lens models (spec section 6) and the coefficients each takes, in OpenCV's order.
+LENS_MODELS = {
+    "plumb_bob": ("k1", "k2", "p1", "p2", "k3"),
+    "rational_polynomial": ("k1", "k2", "p1", "p2", "k3", "k4", "k5", "k6",
+                            "s1", "s2", "s3", "s4", "tau_x", "tau_y"),
+    "equidistant": ("k1", "k2", "k3", "k4"),
+}
+#: Other names people use for them (ROS's ``radtan``, OpenCV's ``fisheye``).
+LENS_ALIASES = {"radtan": "plumb_bob", "fisheye": "equidistant"}
+#: Every coefficient any model takes (the sidecar columns of a lens).
+LENS_FIELDS = LENS_MODELS["rational_polynomial"]
+
+
+@dataclass(frozen=True)
+class Lens:
+    """A lens distortion model as OpenCV applies it (spec section 6).
+
+    ``model``: ``plumb_bob`` (k1, k2, p1, p2, k3), ``rational_polynomial`` (k1..k6, p1, p2,
+    thin prism s1..s4, tilt tau_x, tau_y) or ``equidistant`` (the fisheye model of
+    ``cv2.fisheye``, k1..k4); ``coefficients`` by name, absent ones 0.
+    """
+
+    model: str
+    coefficients: tuple[tuple[str, float], ...] = ()
+
+    def __post_init__(self) -> None:
+        model = LENS_ALIASES.get(self.model, self.model)
+        if model not in LENS_MODELS:
+            raise ViewError("distortion_model", f"unknown lens model {quote(self.model)}; use "
+                            f"one of {', '.join(LENS_MODELS)}")
+        object.__setattr__(self, "model", model)
+        allowed = LENS_MODELS[model]
+        checked = []
+        for name, value in dict(self.coefficients).items():
+            if name not in allowed:
+                raise ViewError(name, f"the {model} model has no coefficient {name}")
+            number = _as_number(name, value)
+            if abs(number) >= 1e6:
+                raise ViewError(name, f"{name} must be within 1e6 of 0, got {number:.15g}")
+            checked.append((name, number))
+        checked.sort(key=lambda coefficient: allowed.index(coefficient[0]))
+        object.__setattr__(self, "coefficients", tuple(checked))
+
+    @property
+    def is_fisheye(self) -> bool:
+        return self.model == "equidistant"
+
+    def value(self, name: str) -> float:
+        return dict(self.coefficients).get(name, 0.0)
+
+    @property
+    def is_identity(self) -> bool:
+        """No distortion at all (every coefficient 0): a pinhole."""
+        return all(value == 0 for _, value in self.coefficients)
+
+    def opencv_coefficients(self) -> np.ndarray:
+        """The vector OpenCV's functions take: 4 values for the fisheye model, else 5 or 14."""
+        names = LENS_MODELS[self.model]
+        if self.model == "rational_polynomial" and not any(
+            self.value(name) for name in names[8:]
+        ):
+            names = names[:8]
+        return np.array([self.value(name) for name in names], dtype=np.float64)
+
+
 #: OpenCV's camera axes (x right, y down, z forward) to the thesis's (X up, Y right, Z forward),
 #: ``X = -y_cv, Y = x_cv, Z = z_cv`` (spec section 6); the same matrix maps wall frames.
 THESIS_FROM_OPENCV = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
@@ -94,8 +159,8 @@ class Intrinsics:
 
     OpenCV's pixel convention (spec section 6): ``(col, row)``, row down, pixel centres at
     integers; camera ``x`` right, ``y`` down. ``cx, cy`` default to the image centre
-    ``((width-1)/2, (height-1)/2)`` when the size is known. ``lens`` is the slot of a lens
-    distortion model: ``None``, a pinhole, until real cameras land. Values are checked as
+    ``((width-1)/2, (height-1)/2)`` when the size is known. ``lens``: a :class:`Lens`, or
+    ``None`` for a pinhole. Values are checked as
     :class:`View` documents, raising :class:`ViewError` naming the field.
     """
 
@@ -106,7 +171,7 @@ class Intrinsics:
     skew: float = 0.0
     width: int | None = None
     height: int | None = None
-    lens: None = None
+    lens: Lens | None = None
 
     def __post_init__(self) -> None:
         for name in ("fx", "fy", "cx", "cy", "skew", "width", "height"):
@@ -138,8 +203,8 @@ class Intrinsics:
         if self.cx is None and self.width is not None and self.height is not None:
             object.__setattr__(self, "cx", (self.width - 1) / 2.0)
             object.__setattr__(self, "cy", (self.height - 1) / 2.0)
-        if self.lens is not None:
-            raise ViewError("lens", "lens distortion models are not supported yet")
+        if self.lens is not None and self.lens.is_identity:
+            object.__setattr__(self, "lens", None)  # a pinhole, on the fast path
 
     @property
     def focal(self) -> float:
