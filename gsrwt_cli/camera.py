@@ -138,14 +138,19 @@ class Lens:
         """No distortion at all (every coefficient 0): a pinhole."""
         return all(value == 0 for _, value in self.coefficients)
 
-    def opencv_coefficients(self) -> np.ndarray:
-        """The vector OpenCV's functions take: 4 values for the fisheye model, else 5 or 14."""
+    def opencv_names(self) -> tuple[str, ...]:
+        """The coefficients of the vector OpenCV's functions take, in its order: 4 for the
+        fisheye model, 5 for plumb_bob, 8 or (with prism or tilt terms) 14 for rational."""
         names = LENS_MODELS[self.model]
         if self.model == "rational_polynomial" and not any(
             self.value(name) for name in names[8:]
         ):
             names = names[:8]
-        return np.array([self.value(name) for name in names], dtype=np.float64)
+        return names
+
+    def opencv_coefficients(self) -> np.ndarray:
+        """The vector OpenCV's functions take (:meth:`opencv_names`)."""
+        return np.array([self.value(name) for name in self.opencv_names()], dtype=np.float64)
 
 
 #: OpenCV's camera axes (x right, y down, z forward) to the thesis's (X up, Y right, Z forward),
@@ -274,8 +279,9 @@ class Pose:
     """Where a camera looks, relative to the wall: ``pan``, ``tilt``, ``roll`` in degrees.
 
     ``pan > 0`` turns left, ``tilt > 0`` tilts up (spec section 1), both strictly between -90
-    and 90. ``roll`` turns the camera about its optical axis after them (spec section 6); it
-    is fixed at 0 until real cameras land.
+    and 90. ``roll`` turns the camera about its optical axis after them (spec section 6):
+    ``world_from_camera = Rx(pan) Ry(tilt) Rz(roll)``; ``roll > 0`` leans the camera's top to
+    the right (seen from behind it), so the scene appears turned counter-clockwise.
     """
 
     pan: float
@@ -293,12 +299,24 @@ class Pose:
                     f"{name} must be strictly between -90 and 90 degrees (the camera cannot see "
                     f"the wall otherwise), got {value:g}",
                 )
-        if self.roll != 0:
-            raise ViewError("roll", "roll is not supported yet (it must be 0)")
+        if abs(self.roll) > 180.0:
+            raise ViewError("roll", f"roll must be within -180 and 180 degrees, got "
+                            f"{self.roll:g}")
 
     def camera_from_world(self) -> Matrix:
-        """The rotation whose rows are the camera's axes in the wall's frame (Eq. 3.8)."""
-        return camera_from_world(self.pan, self.tilt)
+        """The rotation whose rows are the camera's axes in the wall's frame (Eq. 3.8, then
+        the roll about the optical axis): ``(Rx(pan) Ry(tilt) Rz(roll))^T``."""
+        return self.unrolled_from_rolled().T @ camera_from_world(self.pan, self.tilt)
+
+    def unrolled_from_rolled(self) -> Matrix:
+        """``Rz(roll)``: directions of the rolled camera in the camera at the same pan and
+        tilt without roll (thesis frame, X up, Y right). In the image frame (x up, y right)
+        the same matrix turns the rolled camera's image points into the unrolled one's."""
+        if self.roll == 0:
+            return np.eye(3)
+        angle = math.radians(self.roll)
+        c, s = math.cos(angle), math.sin(angle)
+        return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
 
     @property
     def theta_deg(self) -> float:
@@ -313,7 +331,8 @@ class Pose:
 
 #: The fields a sidecar row or the command line gives for one view, in the tables' order:
 #: the pose, then the intrinsics, then the distance (derived here, used everywhere).
-VIEW_FIELDS = ("pan", "tilt", "focal", "cx", "cy", "width", "height", "distance")
+VIEW_FIELDS = ("pan", "tilt", "roll", "focal", "fx", "fy", "cx", "cy", "skew", "width", "height",
+               "distance")
 
 
 @dataclass(frozen=True, init=False)
@@ -355,6 +374,11 @@ class View:
         height: int | None = None,
         distance: float | None = None,
         *,
+        roll: float = 0.0,
+        fx: float | None = None,
+        fy: float | None = None,
+        skew: float = 0.0,
+        lens: Lens | None = None,
         intrinsics: Intrinsics | None = None,
         pose: Pose | None = None,
         parameters: GsrwtParameters | None = None,  # accepted from dataclasses.replace
@@ -363,13 +387,19 @@ class View:
             for name, value in (("pan", pan), ("tilt", tilt)):
                 if value is None:
                     raise ViewError(name, f"{name} is required")
-            pose = Pose(pan, tilt)  # type: ignore[arg-type]
+            pose = Pose(pan, tilt, roll)  # type: ignore[arg-type]
         if intrinsics is None:
             focal = _as_number("focal", focal)
-            if focal is None:
-                raise ViewError("focal", "focal is required")
-            _check_range("focal", focal, 0, MAX_FOCAL_PX, " pixels")
-            intrinsics = Intrinsics(focal, focal, cx, cy, width=width, height=height)
+            if focal is not None:
+                _check_range("focal", focal, 0, MAX_FOCAL_PX, " pixels")
+            if (fx is None) != (fy is None):
+                missing = "fy" if fy is None else "fx"
+                raise ViewError(missing, "fx and fy must be given together")
+            if fx is None:
+                if focal is None:
+                    raise ViewError("focal", "focal is required")
+                fx = fy = focal
+            intrinsics = Intrinsics(fx, fy, cx, cy, skew, width, height, lens)
         distance = _as_number("distance", distance)
         if distance is not None:
             _check_range("distance", distance, *DISTANCE_RANGE, "")
@@ -390,11 +420,25 @@ class View:
 
     pan = property(lambda self: self.pose.pan, doc="Pan in degrees (:class:`Pose`).")
     tilt = property(lambda self: self.pose.tilt, doc="Tilt in degrees (:class:`Pose`).")
+    roll = property(lambda self: self.pose.roll, doc="Roll in degrees (:class:`Pose`).")
     focal = property(lambda self: self.intrinsics.focal, doc="Focal length in pixels.")
     cx = property(lambda self: self.intrinsics.cx, doc="Principal point column.")
     cy = property(lambda self: self.intrinsics.cy, doc="Principal point row.")
     width = property(lambda self: self.intrinsics.width, doc="Image width, if known.")
     height = property(lambda self: self.intrinsics.height, doc="Image height, if known.")
+
+    def sidecar_values(self) -> dict[str, float | int | None]:
+        """The view as a sidecar row gives it: every field of :data:`VIEW_FIELDS`, those at
+        their defaults (no roll, square pixels, no skew) as None, so that they are left out."""
+        intrinsics = self.intrinsics
+        square = intrinsics.fx == intrinsics.fy
+        return {
+            "pan": self.pan, "tilt": self.tilt, "roll": self.roll or None,
+            "focal": intrinsics.fx if square else None,
+            "fx": None if square else intrinsics.fx, "fy": None if square else intrinsics.fy,
+            "cx": self.cx, "cy": self.cy, "skew": intrinsics.skew or None,
+            "width": self.width, "height": self.height, "distance": self.distance,
+        }
 
     def with_size(self, width: int, height: int) -> View:
         """The same view with a known image size (the principal point defaults to its centre)."""
@@ -409,18 +453,26 @@ class View:
         return self.intrinsics._principal_point()
 
     def image_from_pixel(self) -> Matrix:
-        """``[x, y, 1] = A @ [col, row, 1]`` (:meth:`Intrinsics.image_from_pixel`)."""
-        return self.intrinsics.image_from_pixel()
+        """Pixel ``(col, row, 1)`` to the image frame of the camera at this pan and tilt
+        *without* roll (:meth:`Intrinsics.image_from_pixel`, then the roll undone: spec
+        section 6, the GS-RWT of a rolled view is the thesis's applied after turning the
+        image frame by the roll). Ideal (undistorted) pixels when the camera has a lens."""
+        if self.pose.roll == 0:
+            return self.intrinsics.image_from_pixel()
+        return self.pose.unrolled_from_rolled() @ self.intrinsics.image_from_pixel()
 
     def pixel_from_image(self) -> Matrix:
-        """``[col, row, 1] = A @ [x, y, 1]`` (:meth:`Intrinsics.pixel_from_image`)."""
-        return self.intrinsics.pixel_from_image()
+        """The inverse of :meth:`image_from_pixel`."""
+        if self.pose.roll == 0:
+            return self.intrinsics.pixel_from_image()
+        return self.intrinsics.pixel_from_image() @ self.pose.unrolled_from_rolled().T
 
     def vanishing_point_pixels(self) -> np.ndarray:
         """The main vanishing point as ``(col, row)``; ``inf`` for the frontal view."""
         x, y = self.parameters.vanishing_point
         cx, cy = self._principal_point()
-        if self.intrinsics.fx == self.intrinsics.fy and self.intrinsics.skew == 0:
+        intrinsics = self.intrinsics
+        if intrinsics.fx == intrinsics.fy and intrinsics.skew == 0 and self.pose.roll == 0:
             return np.array([y + cx, cy - x])  # exact where infinite
         return map_points(self.pixel_from_image(), [[x, y]])[0]
 

@@ -14,7 +14,7 @@ import numpy as np
 
 from .camera import View
 from .geometry import Matrix, map_points
-from .pixelmap import PixelMap
+from .pixelmap import LensDistortion, PixelMap
 
 
 def canonical_from_pixel(view: View) -> Matrix:
@@ -152,6 +152,10 @@ def full_frame(
     cols = np.linspace(-0.5, view.width - 0.5, samples)
     rows = np.linspace(-0.5, view.height - 0.5, samples)
     grid = np.stack(np.meshgrid(cols, rows), axis=-1).reshape(-1, 2)
+    lens = lens_distortion(view)
+    if lens is not None:  # the distorted image's pixels, as a pinhole would have seen them
+        grid = lens.undistort(grid)
+        grid = grid[np.all(np.isfinite(grid), axis=1)]
     w = grid @ homography[2, :2] + homography[2, 2]
     visible = grid[w > 1e-12]
     reference = local_stretch(homography, np.array([[view.cx, view.cy]]))[0]
@@ -249,7 +253,17 @@ def _plan_output(
     if width * height > max_pixels:
         raise OutputTooLargeError(width, height, max_pixels)
     homography = frame.output_from_default() @ output_from_input(view)
-    return Plan(view, frame, PixelMap(homography, (width, height)))
+    return Plan(view, frame, PixelMap(homography, (width, height), lens_distortion(view)))
+
+
+def lens_distortion(view: View) -> LensDistortion | None:
+    """The view's lens as the pixel map applies it (None for a pinhole)."""
+    lens = view.intrinsics.lens
+    if lens is None:
+        return None
+    camera_matrix = tuple(tuple(float(v) for v in row) for row in view.intrinsics.matrix())
+    return LensDistortion(camera_matrix, tuple(float(v) for v in lens.opencv_coefficients()),
+                          lens.is_fisheye)
 
 
 def texture_from_camera(view: View, texture_size: tuple[int, int]) -> Matrix:

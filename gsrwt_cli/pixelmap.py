@@ -2,19 +2,103 @@
 
 A :class:`PixelMap` is what framing produces and rectify, render, the landmark commands and the
 table consume. It maps points both ways, knows which output pixels have no source, resamples
-an image in one OpenCV pass and says what the table's geometry columns are. Today's is a
-homography (the GS-RWT composed with the pixel frames); a dense map (for lens distortion) can
-stand behind the same methods without its callers changing.
+an image in one OpenCV pass and says what the table's geometry columns are. It is a
+homography (the GS-RWT composed with the pixel frames) from ideal input pixels, and for a
+camera with a lens the lens model after it: then the warp is one ``cv2.remap`` through dense
+maps built once (and cached) per camera, pose and frame, never an undistortion followed by a
+second warp.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 
 import cv2
 import numpy as np
 
 from .geometry import Matrix, map_points
+
+_POINT_CRITERIA = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 50, 1e-12)
+
+
+@dataclass(frozen=True)
+class LensDistortion:
+    """The input camera's lens as OpenCV models it: ``camera_matrix`` (K, skew included),
+    ``coefficients`` (OpenCV's vector) and whether it is the ``fisheye`` (equidistant) model.
+
+    Ideal pixels are those of the same K without distortion (a pinhole); the maps go from
+    ideal to distorted (the lens, :meth:`distort`) and back (:meth:`undistort`, iterated).
+    """
+
+    camera_matrix: tuple[tuple[float, float, float], ...]
+    coefficients: tuple[float, ...]
+    fisheye: bool = False
+
+    @property
+    def _k(self) -> np.ndarray:
+        return np.array(self.camera_matrix, dtype=np.float64)
+
+    @property
+    def _d(self) -> np.ndarray:
+        return np.array(self.coefficients, dtype=np.float64)
+
+    def _normalized(self, pixels: np.ndarray) -> np.ndarray:
+        return map_points(np.linalg.inv(self._k), pixels)
+
+    def _pixels(self, normalized: np.ndarray) -> np.ndarray:
+        return map_points(self._k, normalized)
+
+    def distort(self, ideal: np.ndarray) -> np.ndarray:
+        """``(N, 2)`` ideal pixels to the pixels the lens puts them on."""
+        rays = np.column_stack([self._normalized(ideal), np.ones(len(ideal))])[:, None, :]
+        zero = np.zeros(3)
+        if self.fisheye:
+            distorted, _ = cv2.fisheye.projectPoints(rays, zero, zero, np.eye(3), self._d)
+        else:
+            distorted, _ = cv2.projectPoints(rays, zero, zero, np.eye(3), self._d)
+        return self._pixels(distorted.reshape(-1, 2))
+
+    def undistort(self, pixels: np.ndarray) -> np.ndarray:
+        """``(N, 2)`` pixels of the image to ideal pixels (OpenCV's iterative inverse)."""
+        normalized = self._normalized(np.asarray(pixels, dtype=np.float64))[:, None, :]
+        if self.fisheye:
+            ideal = cv2.fisheye.undistortPoints(normalized, np.eye(3), self._d,
+                                                criteria=_POINT_CRITERIA)
+        else:
+            ideal = cv2.undistortPoints(normalized, np.eye(3), self._d, None, None, None,
+                                            _POINT_CRITERIA)
+        return self._pixels(ideal.reshape(-1, 2))
+
+    def maps(self, output_from_ideal: np.ndarray, size: tuple[int, int]):
+        """Fixed-point maps of every output pixel to its (distorted) input pixel for
+        ``cv2.remap``: output -> ideal input pixel (the homography's inverse) -> lens.
+
+        ``cv2.initUndistortRectifyMap`` computes ``K distort((newK R)^-1 o)``; with ``newK = I``
+        and ``R = output_from_ideal @ K`` that is the lens applied to ``K^-1 H^-1 o``. OpenCV
+        there ignores skew, so a skewed camera's maps are computed point by point instead.
+        """
+        k = self._k
+        rotation = np.asarray(output_from_ideal, dtype=np.float64) @ k
+        if k[0, 1] == 0:
+            initialize = (cv2.fisheye.initUndistortRectifyMap if self.fisheye
+                          else cv2.initUndistortRectifyMap)
+            return initialize(k, self._d, rotation, np.eye(3), size, cv2.CV_16SC2)
+        width, height = size
+        cols, rows = np.meshgrid(np.arange(width, dtype=np.float64),
+                                 np.arange(height, dtype=np.float64))
+        outputs = np.column_stack([cols.ravel(), rows.ravel()])
+        sources = self.distort(map_points(np.linalg.inv(output_from_ideal), outputs))
+        sources = np.nan_to_num(sources, nan=-1e6, posinf=-1e6, neginf=-1e6)
+        map_x = sources[:, 0].reshape(height, width).astype(np.float32)
+        map_y = sources[:, 1].reshape(height, width).astype(np.float32)
+        return cv2.convertMaps(map_x, map_y, cv2.CV_16SC2)
+
+
+@lru_cache(maxsize=4)
+def _cached_maps(lens: LensDistortion, homography: bytes, size: tuple[int, int]):
+    """A worker's maps by (camera, pose, frame): a pan-tilt unit revisits the same poses."""
+    return lens.maps(np.frombuffer(homography, dtype=np.float64).reshape(3, 3), size)
 
 
 @dataclass(frozen=True)
@@ -29,18 +113,22 @@ class PixelMap:
 
     output_from_input: Matrix
     size: tuple[int, int]
+    lens: LensDistortion | None = None  # input pixels are ideal ones distorted by this
 
     def to_output(self, points: np.ndarray) -> np.ndarray:
         """``(N, 2)`` input pixels to output pixels."""
+        if self.lens is not None:
+            points = self.lens.undistort(points)
         return map_points(self.output_from_input, points)
 
     def to_input(self, points: np.ndarray) -> np.ndarray:
         """``(N, 2)`` output pixels to input pixels."""
-        return map_points(np.linalg.inv(self.output_from_input), points)
+        ideal = map_points(np.linalg.inv(self.output_from_input), points)
+        return ideal if self.lens is None else self.lens.distort(ideal)
 
     def then(self, output_from_output: Matrix, size: tuple[int, int]) -> PixelMap:
         """This map followed by a homography of the output (a new frame of ``size``)."""
-        return PixelMap(np.asarray(output_from_output) @ self.output_from_input, size)
+        return PixelMap(np.asarray(output_from_output) @ self.output_from_input, size, self.lens)
 
     def beyond_horizon(self) -> np.ndarray | None:
         """The output region (pixel-edge coordinates, a convex polygon) whose source lies
@@ -69,15 +157,15 @@ class PixelMap:
         with no source (outside the input or beyond the horizon); ``out``: an array of the
         output's shape and type to write into.
         """
-        warped = cv2.warpPerspective(
-            pixels,
-            np.asarray(self.output_from_input, dtype=np.float64),
-            self.size,
-            dst=out,
-            flags=interpolation,
-            borderMode=cv2.BORDER_CONSTANT,
-            borderValue=fill,
-        )
+        homography = np.ascontiguousarray(self.output_from_input, dtype=np.float64)
+        if self.lens is None:
+            warped = cv2.warpPerspective(pixels, homography, self.size, dst=out,
+                                         flags=interpolation, borderMode=cv2.BORDER_CONSTANT,
+                                         borderValue=fill)
+        else:  # one pass: output -> wall -> camera ray -> lens -> input pixel
+            map_xy, map_fraction = _cached_maps(self.lens, homography.tobytes(), self.size)
+            warped = cv2.remap(pixels, map_xy, map_fraction, interpolation, dst=out,
+                               borderMode=cv2.BORDER_CONSTANT, borderValue=fill)
         polygon = self.beyond_horizon()
         if polygon is not None:
             scale = 256  # 8 fractional bits

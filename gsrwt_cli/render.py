@@ -26,7 +26,7 @@ from .outputs import (
     remove_stale_temporaries,
     write_atomic,
 )
-from .sidecar import VIEW_FIELDS, Record, RecordError, format_sidecar, view_from_values
+from .sidecar import Record, RecordError, format_sidecar, view_from_values
 from .targets import (
     DirectoryTargetError,
     NotADirectoryTargetError,
@@ -195,8 +195,7 @@ def write_views_sidecar(path: Path, jobs: Iterable[RenderJob]) -> None:
     Raises :class:`~.sidecar.SidecarError` for an extension that is not a sidecar's and
     :class:`UnwritableFileError` when the file cannot be written.
     """
-    rows = [{"image": job.name, **{name: getattr(job.view, name) for name in VIEW_FIELDS}}
-            for job in jobs]
+    rows = [{"image": job.name, **job.view.sidecar_values()} for job in jobs]
     text = format_sidecar(path, rows)
     try:
         write_atomic(path, text.encode("utf-8"))

@@ -20,6 +20,9 @@ PARAMS_COLUMNS = (
     "pan_deg",
     "tilt_deg",
     "focal_px",
+    "roll_deg",
+    "fx_px",
+    "fy_px",
     "theta_deg",
     "delta_deg",
     "a_px",
@@ -45,11 +48,17 @@ def params_row(view: View, image: str | None = None) -> dict[str, Any]:
     """
     parameters = view.parameters
     vp_x, vp_y = (float(v) for v in parameters.vanishing_point)
+    if view.roll:  # the image frame of the rolled camera: the point turns with the roll
+        rolled = view.pose.unrolled_from_rolled()[:2, :2].T @ np.array([vp_x, vp_y])
+        vp_x, vp_y = (float(v) for v in rolled)
     row: dict[str, Any] = {
         "image": image,
         "pan_deg": view.pan,
         "tilt_deg": view.tilt,
         "focal_px": view.focal,
+        "roll_deg": view.roll,
+        "fx_px": view.intrinsics.fx,
+        "fy_px": view.intrinsics.fy,
         "theta_deg": parameters.theta_deg,
         "delta_deg": parameters.delta_deg,
         "a_px": parameters.shift,

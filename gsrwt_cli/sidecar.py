@@ -35,13 +35,17 @@ from typing import Any
 
 import yaml
 
-from .camera import VIEW_FIELDS, View, ViewError
+from .camera import LENS_FIELDS, LENS_MODELS, VIEW_FIELDS, Lens, View, ViewError
 from .geometry import pan_tilt_from_gsrwt
 from .messages import escape_controls, one_line, quote
 from .safe_yaml import YamlInputError, load_yaml
 
 GSRWT_FIELDS = ("delta", "a", "gamma")
-NUMERIC_FIELDS = VIEW_FIELDS + GSRWT_FIELDS
+NUMERIC_FIELDS = VIEW_FIELDS + LENS_FIELDS + GSRWT_FIELDS
+#: Fields whose values are words, not numbers.
+TEXT_FIELDS = ("distortion_model",)
+#: Every field a sidecar record may give.
+SIDECAR_FIELDS = NUMERIC_FIELDS + TEXT_FIELDS
 #: How far a given gamma may stray from the one that delta and a imply (the thesis rounds to 1°).
 GAMMA_TOLERANCE_DEG = 1.0
 
@@ -158,11 +162,15 @@ def view_from_values(values: Mapping[str, Any], where: str) -> View:
         except ValueError as error:
             raise RecordError(where, str(error).split(" ", 1)[0], str(error)) from None
         numbers_given["pan"], numbers_given["tilt"] = pan, tilt
-    for name in ("pan", "tilt", "focal"):
+    for name in ("pan", "tilt"):
         if name not in numbers_given:
             raise RecordError(where, None, f"missing field '{name}'")
+    if "focal" not in numbers_given and not {"fx", "fy"} <= given:
+        raise RecordError(where, None, "missing field 'focal'")
     try:
-        view = View(**{name: numbers_given[name] for name in VIEW_FIELDS if name in numbers_given})
+        lens = _lens_from_values(values, numbers_given)
+        view = View(**{name: numbers_given[name] for name in VIEW_FIELDS if name in numbers_given},
+                    lens=lens)
     except ViewError as error:
         raise RecordError(where, error.field, str(error)) from None
     if "gamma" in numbers_given:
@@ -175,6 +183,20 @@ def view_from_values(values: Mapping[str, Any], where: str) -> View:
                 f"gamma = {implied:.2f}",
             )
     return view
+
+
+def _lens_from_values(values: Mapping[str, Any], numbers: Mapping[str, float]) -> Lens | None:
+    """The lens a record gives: ``distortion_model`` (default ``plumb_bob``, or
+    ``rational_polynomial`` when a coefficient only it has is given) and coefficients."""
+    coefficients = tuple((name, numbers[name]) for name in LENS_FIELDS if name in numbers)
+    model = values.get("distortion_model")
+    if model is None or str(model).strip() == "":
+        if not coefficients:
+            return None
+        plumb_bob = set(LENS_MODELS["plumb_bob"])
+        model = ("plumb_bob" if {name for name, _ in coefficients} <= plumb_bob
+                 else "rational_polynomial")
+    return Lens(str(model).strip().lower(), coefficients)
 
 
 @dataclass
@@ -313,7 +335,7 @@ def _csv_records(path: Path, text: str, delimiter: str) -> list[Record]:
             image = row.pop("image", "")
             if not image:
                 raise SidecarError(f"{where}, field 'image': empty")
-            values = {k: v for k, v in row.items() if k in NUMERIC_FIELDS}
+            values = {k: v for k, v in row.items() if k in SIDECAR_FIELDS}
             records.append(Record(image=image, values=values, where=where))
     except csv.Error as error:
         raise SidecarError(
@@ -369,7 +391,7 @@ def _yaml_records(path: Path, data: Any) -> list[Record]:
     else:
         raise SidecarError(f"{name}: expected a list of records or a mapping of image to record")
     for field_name in defaults:
-        if field_name not in NUMERIC_FIELDS:
+        if field_name not in SIDECAR_FIELDS:
             raise SidecarError(f"{name} defaults: unknown field {quote(field_name)}")
     records = []
     for where, key, item in items:
@@ -379,7 +401,7 @@ def _yaml_records(path: Path, data: Any) -> list[Record]:
             raise SidecarError(f"{where}, field 'image': missing")
         if isinstance(image, bool) or not isinstance(image, (str, int, float)):
             raise SidecarError(f"{where}, field 'image': expected a file name, got {quote(image)}")
-        values = {k: v for k, v in mapping.items() if k in NUMERIC_FIELDS and v is not None}
+        values = {k: v for k, v in mapping.items() if k in SIDECAR_FIELDS and v is not None}
         records.append(Record(image=str(image), values=values, where=where, defaults=defaults))
     return records
 

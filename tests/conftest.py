@@ -20,7 +20,7 @@ def rodrigues(axis: np.ndarray, angle_rad: float) -> np.ndarray:
     return np.eye(3) + math.sin(angle_rad) * cross + (1 - math.cos(angle_rad)) * cross @ cross
 
 
-def camera_axes(pan_deg: float, tilt_deg: float) -> np.ndarray:
+def camera_axes(pan_deg: float, tilt_deg: float, roll_deg: float = 0.0) -> np.ndarray:
     """Rows: the camera's up, right and forward axes in the wall's frame, built from the words.
 
     Independent of the package: start facing the wall (X up, Y right, Z forward), turn about
@@ -33,16 +33,20 @@ def camera_axes(pan_deg: float, tilt_deg: float) -> np.ndarray:
     up, right, forward = pan_rotation @ up, pan_rotation @ right, pan_rotation @ forward
     tilt_sense = -1.0 if (rodrigues(right, 0.1) @ forward)[0] < 0 else 1.0  # tilt > 0: up, +X
     tilt_rotation = rodrigues(right, tilt_sense * math.radians(tilt_deg))
-    return np.stack([tilt_rotation @ up, tilt_rotation @ right, tilt_rotation @ forward])
+    up, right, forward = tilt_rotation @ up, tilt_rotation @ right, tilt_rotation @ forward
+    # Roll > 0: about the camera's own forward axis, so that its top leans to its right.
+    roll_sense = 1.0 if (rodrigues(forward, 0.1) @ up) @ right > 0 else -1.0
+    roll_rotation = rodrigues(forward, roll_sense * math.radians(roll_deg))
+    return np.stack([roll_rotation @ up, roll_rotation @ right, forward])
 
 
 def project_wall_points(
     wall_xy: np.ndarray, distance: float, pan: float, tilt: float, focal: float,
-    cx: float, cy: float,
+    cx: float, cy: float, roll: float = 0.0,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Pixels ``(col, row)`` of wall points ``(X up, Y right)`` at ``Z = distance``, and depth."""
     points = np.column_stack([wall_xy, np.full(len(wall_xy), distance)])
-    in_camera = points @ camera_axes(pan, tilt).T
+    in_camera = points @ camera_axes(pan, tilt, roll).T
     depth = in_camera[:, 2]
     x = focal * in_camera[:, 0] / depth
     y = focal * in_camera[:, 1] / depth
@@ -102,7 +106,8 @@ def wall_from_texture_pixels(cols, rows, texture_shape, centre, distance, focal)
     return x, y
 
 
-def render_view(texture, pan, tilt, focal, width, height, cx, cy, distance=10.0, centre=None):
+def render_view(texture, pan, tilt, focal, width, height, cx, cy, distance=10.0, centre=None,
+                roll=0.0):
     """What a pinhole camera sees of a wall covered by ``texture`` (independent of gsrwt).
 
     Casts the ray of every camera pixel with :func:`camera_axes`, meets the wall ``Z =
@@ -112,7 +117,7 @@ def render_view(texture, pan, tilt, focal, width, height, cx, cy, distance=10.0,
     """
     import cv2
 
-    axes = camera_axes(pan, tilt)
+    axes = camera_axes(pan, tilt, roll)
     if centre is None:
         centre = distance * axes[2][:2] / axes[2][2]
     cols, rows = np.meshgrid(np.arange(width, dtype=float), np.arange(height, dtype=float))
@@ -134,7 +139,7 @@ def render_view(texture, pan, tilt, focal, width, height, cx, cy, distance=10.0,
 
 
 def expected_rectified(texture, pan, tilt, focal, width, height, cx, cy, distance, centre,
-                       margin=2):
+                       margin=2, roll=0.0):
     """The frontal view gsrwt should produce (default frame) and the mask the camera saw.
 
     Output pixel ``(col, row)`` shows the wall point ``A + ((cy - row), (col - cx)) Zc/f`` with
@@ -148,7 +153,8 @@ def expected_rectified(texture, pan, tilt, focal, width, height, cx, cy, distanc
     unit = distance / focal
     cols, rows = np.meshgrid(np.arange(width, dtype=float), np.arange(height, dtype=float))
     wall = np.stack([axis_point[0] + (cy - rows) * unit, axis_point[1] + (cols - cx) * unit], -1)
-    pixels, depth = project_wall_points(wall.reshape(-1, 2), distance, pan, tilt, focal, cx, cy)
+    pixels, depth = project_wall_points(wall.reshape(-1, 2), distance, pan, tilt, focal, cx, cy,
+                                        roll)
     pixels = pixels.reshape(height, width, 2)
     seen = (depth.reshape(height, width) > 0) & (pixels[..., 0] >= margin)
     seen &= (pixels[..., 0] <= width - 1 - margin) & (pixels[..., 1] >= margin)

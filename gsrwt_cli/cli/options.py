@@ -98,9 +98,13 @@ def resolve_format(fmt: str | None) -> str:
 VIEW_OPTIONS: dict[str, tuple[type, str]] = {
     "pan": (float, "Pan in degrees, positive turns left."),
     "tilt": (float, "Tilt in degrees, positive tilts up."),
-    "focal": (float, "Focal length in pixels."),
+    "roll": (float, "Roll in degrees about the optical axis, positive leans the top right."),
+    "focal": (float, "Focal length in pixels (fx = fy)."),
+    "fx": (float, "Horizontal focal length in pixels (with --fy, instead of --focal)."),
+    "fy": (float, "Vertical focal length in pixels (with --fx)."),
     "cx": (float, "Principal point column [default: image centre]."),
     "cy": (float, "Principal point row [default: image centre]."),
+    "skew": (float, "Skew of the camera matrix, K[0, 1] [default: 0]."),
     "width": (int, "Image width in pixels."),
     "height": (int, "Image height in pixels."),
     "distance": (float, "Camera-to-wall distance (your unit)."),
@@ -108,7 +112,7 @@ VIEW_OPTIONS: dict[str, tuple[type, str]] = {
 
 
 def view_options(func: F) -> F:
-    """``--pan --tilt --focal --cx --cy --width --height --distance`` (one view, or defaults):
+    """``--pan --tilt --roll --focal --fx --fy --cx --cy --skew --width --height --distance``:
     one option for each field of :data:`~gsrwt_cli.sidecar.VIEW_FIELDS`, in its order."""
     for name in reversed(VIEW_FIELDS):
         kind, text = VIEW_OPTIONS[name]

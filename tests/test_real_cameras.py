@@ -1,0 +1,282 @@
+"""Real cameras: roll, fx != fy, skew and lens distortion, checked against a camera built from
+OpenCV's own projection functions (not the project's) and from the words of the spec.
+
+The camera's axes come from :func:`conftest.camera_axes` (pan, tilt, then roll about the
+optical axis so that the top leans right); rays become pixels through ``cv2.projectPoints``
+(``cv2.fisheye.projectPoints``) and pixels rays through ``cv2.undistortPointsIter``
+(``cv2.fisheye.undistortPoints``). The camera image is rendered from a wall texture with it;
+the reference of the rectified view is one ``cv2.remap`` of that image through it.
+"""
+
+from __future__ import annotations
+
+import math
+
+import cv2
+import numpy as np
+import pytest
+from conftest import camera_axes, psnr, run_gsrwt, smooth_texture
+
+from gsrwt_cli import View
+from gsrwt_cli.camera import Lens
+from gsrwt_cli.report import params_row
+
+WIDTH, HEIGHT, DISTANCE = 320, 240, 10.0
+TEXTURE = smooth_texture(700, 900, 21)
+CRITERIA = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 60, 1e-12)
+
+
+class OpenCVCamera:
+    """A camera at the origin looking at the wall ``Z = DISTANCE`` (world X up, Y right)."""
+
+    def __init__(self, pan, tilt, roll, fx, fy, cx, cy, skew=0.0, model=None, coefficients=()):
+        up, right, forward = camera_axes(pan, tilt, roll)
+        self.camera_from_world = np.stack([right, -up, forward])  # OpenCV axes: x right, y down
+        self.k = np.array([[fx, skew, cx], [0.0, fy, cy], [0.0, 0.0, 1.0]])
+        self.model, self.coefficients = model, np.array(coefficients, dtype=np.float64)
+        self.focal = math.sqrt(fx * fy)
+        self.axis_point = DISTANCE * forward[:2] / forward[2]
+
+    def pixels_of_wall(self, wall_xy: np.ndarray) -> np.ndarray:
+        """Pixels of wall points ``(X, Y)``; NaN for points behind the camera."""
+        world = np.column_stack([wall_xy, np.full(len(wall_xy), DISTANCE)])
+        camera = world @ self.camera_from_world.T
+        behind = camera[:, 2] <= 1e-9
+        camera[behind, 2] = 1.0
+        rays = (camera / camera[:, 2:3])[:, None, :]
+        zero = np.zeros(3)
+        if self.model == "equidistant":
+            distorted, _ = cv2.fisheye.projectPoints(rays, zero, zero, np.eye(3),
+                                                     self.coefficients)
+        elif self.model is not None:
+            distorted, _ = cv2.projectPoints(rays, zero, zero, np.eye(3), self.coefficients)
+        else:
+            distorted = rays[:, :, :2]
+        normalized = distorted.reshape(-1, 2)
+        pixels = normalized @ self.k[:2, :2].T + self.k[:2, 2]
+        pixels[behind] = np.nan
+        return pixels
+
+    def wall_of_pixels(self, pixels: np.ndarray) -> np.ndarray:
+        """Wall points ``(X, Y)`` the pixels see (NaN where they look away from the wall)."""
+        normalized = np.column_stack([pixels, np.ones(len(pixels))]) @ np.linalg.inv(self.k).T
+        points = normalized[:, None, :2].copy()
+        if self.model == "equidistant":
+            ideal = cv2.fisheye.undistortPoints(points, np.eye(3), self.coefficients,
+                                                criteria=CRITERIA)
+        elif self.model is not None:
+            ideal = cv2.undistortPoints(points, np.eye(3), self.coefficients, None, None, None,
+                                            CRITERIA)
+        else:
+            ideal = points
+        rays = np.column_stack([ideal.reshape(-1, 2), np.ones(len(pixels))])
+        world = rays @ self.camera_from_world  # camera_from_world^T applied to each ray
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t = np.where(world[:, 2] > 1e-9, DISTANCE / world[:, 2], np.nan)
+        return world[:, :2] * t[:, None]
+
+    def texture_coordinates(self, wall_xy: np.ndarray) -> np.ndarray:
+        """Texture pixels of wall points: the texture's centre on the optical axis point,
+        one texture pixel per ``Zc / f`` wall units (the frontal resolution)."""
+        unit = DISTANCE / self.focal
+        th, tw = TEXTURE.shape[:2]
+        col = (wall_xy[:, 1] - self.axis_point[1]) / unit + (tw - 1) / 2
+        row = (th - 1) / 2 - (wall_xy[:, 0] - self.axis_point[0]) / unit
+        return np.column_stack([col, row])
+
+    def render(self) -> np.ndarray:
+        cols, rows = np.meshgrid(np.arange(WIDTH, dtype=float), np.arange(HEIGHT, dtype=float))
+        wall = self.wall_of_pixels(np.column_stack([cols.ravel(), rows.ravel()]))
+        texture = np.nan_to_num(self.texture_coordinates(wall), nan=-100.0)
+        map_x = texture[:, 0].reshape(HEIGHT, WIDTH).astype(np.float32)
+        map_y = texture[:, 1].reshape(HEIGHT, WIDTH).astype(np.float32)
+        return cv2.remap(TEXTURE, map_x, map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT)
+
+    def output_wall_points(self) -> np.ndarray:
+        """The wall point of every pixel of the default output frame (spec section 6)."""
+        cx, cy = self.k[0, 2], self.k[1, 2]
+        cols, rows = np.meshgrid(np.arange(WIDTH, dtype=float), np.arange(HEIGHT, dtype=float))
+        unit = DISTANCE / self.focal
+        return np.column_stack([self.axis_point[0] + (cy - rows.ravel()) * unit,
+                                self.axis_point[1] + (cols.ravel() - cx) * unit])
+
+    def reference(self, image: np.ndarray, margin: float = 2.0):
+        """One ``cv2.remap`` of the camera image into the default output frame, and the
+        mask of output pixels whose source lies ``margin`` inside the image."""
+        sources = self.pixels_of_wall(self.output_wall_points())
+        inside = np.all(np.isfinite(sources), axis=1)
+        inside &= (sources[:, 0] >= margin) & (sources[:, 0] <= WIDTH - 1 - margin)
+        inside &= (sources[:, 1] >= margin) & (sources[:, 1] <= HEIGHT - 1 - margin)
+        sources = np.nan_to_num(sources, nan=-100.0)
+        map_x = sources[:, 0].reshape(HEIGHT, WIDTH).astype(np.float32)
+        map_y = sources[:, 1].reshape(HEIGHT, WIDTH).astype(np.float32)
+        expected = cv2.remap(image, map_x, map_y, cv2.INTER_LINEAR,
+                             borderMode=cv2.BORDER_CONSTANT)
+        return expected, inside.reshape(HEIGHT, WIDTH)
+
+    def texture_truth(self):
+        """The texture itself at the output's wall points (what a perfect camera gives)."""
+        texture = self.texture_coordinates(self.output_wall_points())
+        return cv2.remap(TEXTURE, texture[:, 0].reshape(HEIGHT, WIDTH).astype(np.float32),
+                         texture[:, 1].reshape(HEIGHT, WIDTH).astype(np.float32),
+                         cv2.INTER_LINEAR)
+
+
+CX, CY = (WIDTH - 1) / 2 + 3.5, (HEIGHT - 1) / 2 - 2.0
+CASES = {
+    "roll+25": dict(pan=20, tilt=15, roll=25, fx=260, fy=260),
+    "roll-40": dict(pan=-15, tilt=25, roll=-40, fx=260, fy=260),
+    "fx!=fy": dict(pan=25, tilt=-10, roll=0, fx=300, fy=240),
+    "skew": dict(pan=10, tilt=20, roll=10, fx=270, fy=250, skew=12.0),
+    "plumb_bob": dict(pan=20, tilt=15, roll=5, fx=240, fy=240, model="plumb_bob",
+                      coefficients=dict(k1=-0.30, k2=0.08, p1=0.001, p2=-0.0015, k3=-0.01)),
+    "rational": dict(pan=-20, tilt=10, roll=-8, fx=250, fy=245, model="rational_polynomial",
+                     coefficients=dict(k1=0.2, k2=-0.1, p1=0.0005, p2=0.0008, k3=0.02,
+                                       k4=0.45, k5=-0.05, k6=0.01)),
+    "fisheye": dict(pan=15, tilt=20, roll=12, fx=170, fy=170, model="equidistant",
+                    coefficients=dict(k1=0.05, k2=-0.01, k3=0.004, k4=-0.001)),
+}
+
+
+def camera_of(case: dict) -> OpenCVCamera:
+    model = case.get("model")
+    names = Lens(model).opencv_names() if model else ()
+    coefficients = [case.get("coefficients", {}).get(name, 0.0) for name in names]
+    return OpenCVCamera(case["pan"], case["tilt"], case["roll"], case["fx"], case["fy"], CX, CY,
+                        case.get("skew", 0.0), model, coefficients)
+
+
+def sidecar_row(name: str, case: dict) -> dict[str, object]:
+    row = {"image": name, "pan": case["pan"], "tilt": case["tilt"], "roll": case["roll"],
+           "fx": case["fx"], "fy": case["fy"], "cx": CX, "cy": CY,
+           "skew": case.get("skew", 0.0)}
+    if case.get("model"):
+        row["distortion_model"] = case["model"]
+        row.update(case["coefficients"])
+    return row
+
+
+@pytest.fixture(scope="module")
+def rectified(tmp_path_factory):
+    """Every case rendered through its OpenCV camera, then rectified by one gsrwt call."""
+    folder = tmp_path_factory.mktemp("cameras")
+    rows = []
+    for name, case in CASES.items():
+        cv2.imwrite(str(folder / f"{name}.png"), camera_of(case).render())
+        rows.append(sidecar_row(f"{name}.png", case))
+    columns = sorted({key for row in rows for key in row}, key=lambda k: (k != "image", k))
+    lines = [",".join(columns)] + [",".join(str(row.get(c, "")) for c in columns) for row in rows]
+    (folder / "views.csv").write_text("\n".join(lines) + "\n")
+    result = run_gsrwt("rectify", str(folder), "--sidecar", str(folder / "views.csv"),
+                       "-o", str(folder / "out"))
+    assert result.returncode == 0, result.stderr
+    return folder
+
+
+@pytest.mark.parametrize("name", list(CASES))
+def test_rectify_matches_a_one_pass_remap_through_the_opencv_camera(rectified, name):
+    camera = camera_of(CASES[name])
+    image = cv2.imread(str(rectified / f"{name}.png"))
+    output = cv2.imread(str(rectified / "out" / f"{name}.png"))
+    expected, inside = camera.reference(image)
+    assert inside.mean() > 0.5, inside.mean()
+    assert psnr(output, expected, inside) >= 40, psnr(output, expected, inside)
+    # And the frontal view is the wall itself (up to the camera's own resampling).
+    assert psnr(output, camera.texture_truth(), inside) >= 28
+    # Not an accident of smooth pixels: the camera image itself is far from it.
+    assert psnr(image, camera.texture_truth(), inside) < 20
+
+
+def test_undistorting_first_and_warping_second_is_worse_than_one_pass(rectified):
+    """The two-interpolation route that one-pass rectification replaces, measured."""
+    case = CASES["plumb_bob"]
+    camera = camera_of(case)
+    image = cv2.imread(str(rectified / "plumb_bob.png"))
+    output = cv2.imread(str(rectified / "out" / "plumb_bob.png"))
+    expected, inside = camera.reference(image)
+    undistorted = cv2.undistort(image, camera.k, camera.coefficients)
+    view = View(case["pan"], case["tilt"], roll=case["roll"], fx=case["fx"], fy=case["fy"],
+                cx=CX, cy=CY, width=WIDTH, height=HEIGHT)
+    from gsrwt_cli.framing import output_from_input
+
+    two_pass = cv2.warpPerspective(undistorted, output_from_input(view), (WIDTH, HEIGHT),
+                                   flags=cv2.INTER_LINEAR)
+    one_pass_db, two_pass_db = psnr(output, expected, inside), psnr(two_pass, expected, inside)
+    assert one_pass_db >= two_pass_db + 5, (one_pass_db, two_pass_db)
+
+
+def test_roll_zero_is_the_thesis_and_roll_turns_the_vanishing_point():
+    plain = View(15, 30, 280, width=WIDTH, height=HEIGHT)
+    zero = View(15, 30, 280, width=WIDTH, height=HEIGHT, roll=0.0)
+    np.testing.assert_array_equal(plain.image_from_pixel(), zero.image_from_pixel())
+    rolled = View(15, 30, 280, width=WIDTH, height=HEIGHT, roll=30.0)
+    row, rolled_row = params_row(plain), params_row(rolled)
+    for column in ("theta_deg", "a_px", "foreshortening", "delta_deg", "gamma_deg"):
+        assert rolled_row[column] == pytest.approx(row[column])
+    # The main vanishing point turns about the principal point by -roll in the image frame
+    # (the scene turns counter-clockwise): the same distance, the angle changed by 30 degrees.
+    before = np.array([row["vp_x"], row["vp_y"]])
+    after = np.array([rolled_row["vp_x"], rolled_row["vp_y"]])
+    assert np.linalg.norm(after) == pytest.approx(np.linalg.norm(before))
+    turned = math.degrees(math.atan2(after[1], after[0]) - math.atan2(before[1], before[0]))
+    assert (turned + 180) % 360 - 180 == pytest.approx(-30.0)
+    # ... and the pixel it names is where the independent camera sees points far down the wall.
+    camera = OpenCVCamera(15, 30, 30, 280, 280, (WIDTH - 1) / 2, (HEIGHT - 1) / 2)
+    far = camera.pixels_of_wall(np.array([[0.0, -1e10]]))[0]  # far along -Y, the pan side
+    vanishing_line = np.array([rolled_row["vl_a"], rolled_row["vl_b"], rolled_row["vl_c"]])
+    assert abs(vanishing_line @ [*far, 1.0]) < 1e-3
+
+
+def test_params_reports_roll_and_both_focal_lengths(tmp_path):
+    result = run_gsrwt("params", "--pan", "10", "--tilt", "5", "--roll", "-12", "--fx", "300",
+                       "--fy", "280", "--width", "320", "--height", "240", "--format", "json")
+    assert result.returncode == 0, result.stderr
+    import json
+
+    (row,) = json.loads(result.stdout)
+    assert (row["roll_deg"], row["fx_px"], row["fy_px"]) == (-12, 300, 280)
+    assert row["focal_px"] == pytest.approx(math.sqrt(300 * 280))
+
+
+def test_rectify_remembers_maps_of_repeated_poses(tmp_path):
+    """A pan-tilt unit revisits poses: the second image of a pose reuses the first's maps,
+    and gives exactly the same pixels as a fresh computation would."""
+    from gsrwt_cli.pixelmap import _cached_maps
+
+    case = CASES["plumb_bob"]
+    camera = camera_of(case)
+    image = camera.render()
+    lens = Lens("plumb_bob", tuple(case["coefficients"].items()))
+    view = View(case["pan"], case["tilt"], roll=case["roll"], fx=case["fx"], fy=case["fy"],
+                cx=CX, cy=CY, lens=lens)
+    from gsrwt_cli.rectify import rectify_image
+
+    _cached_maps.cache_clear()
+    first, _ = rectify_image(image, view)
+    second, _ = rectify_image(image, view)
+    assert _cached_maps.cache_info().hits == 1
+    np.testing.assert_array_equal(first, second)
+
+
+def test_a_bad_lens_in_a_sidecar_names_the_row_and_field(tmp_path):
+    cv2.imwrite(str(tmp_path / "a.png"), smooth_texture(40, 50, 1))
+    (tmp_path / "views.csv").write_text(
+        "image,pan,tilt,focal,distortion_model,k1\na.png,10,5,300,wideangle,-0.3\n")
+    result = run_gsrwt("params", "--sidecar", str(tmp_path / "views.csv"))
+    assert result.returncode == 2
+    (line,) = result.stderr.strip().splitlines()
+    assert "views.csv line 2, field 'distortion_model'" in line and "wideangle" in line
+
+
+def test_full_frame_follows_the_distorted_border():
+    """--bbox full of a barrel-distorted view covers what the lens shows, which a pinhole of
+    the same K would not: its extent comes from the undistorted image border."""
+    from gsrwt_cli.framing import full_frame
+
+    lens = Lens("plumb_bob", (("k1", -0.3), ("k2", 0.08)))
+    pinhole = View(10, 5, 240, width=WIDTH, height=HEIGHT)
+    barrel = View(10, 5, 240, width=WIDTH, height=HEIGHT, lens=lens)
+    plain, wide = full_frame(pinhole, 4.0), full_frame(barrel, 4.0)
+    assert (wide.x1 - wide.x0) > 1.15 * (plain.x1 - plain.x0)
+    assert (wide.y1 - wide.y0) > 1.15 * (plain.y1 - plain.y0)
+
