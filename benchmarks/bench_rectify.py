@@ -50,8 +50,28 @@ def make_images(folder: Path, count: int) -> None:
     (folder / "views.csv").write_text("\n".join(lines) + "\n")
 
 
+#: The wide-angle lens of the ``--lens`` runs (plumb_bob, as a calibration gives it).
+LENS = {"k1": -0.12, "k2": 0.03, "p1": 0.0004, "p2": -0.0003}
+
+
+def write_lens_sidecars(folder: Path) -> tuple[Path, Path]:
+    """Sidecars of the same images seen through :data:`LENS`: with the 8 poses of
+    :data:`POSES` repeated (a pan-tilt unit's), and with a distinct pose for every image."""
+    columns = "image,pan,tilt,focal,distortion_model," + ",".join(LENS)
+    coefficients = ",".join(str(v) for v in LENS.values())
+    repeated, distinct = [columns], [columns]
+    for index, (path, pan, tilt) in enumerate(_views(folder)):
+        repeated.append(f"{path.name},{pan},{tilt},{FOCAL},plumb_bob,{coefficients}")
+        distinct.append(f"{path.name},{pan + 0.01 * index},{tilt},{FOCAL},plumb_bob,"
+                        f"{coefficients}")
+    paths = folder / "views_lens_repeated.csv", folder / "views_lens_distinct.csv"
+    for path, lines in zip(paths, (repeated, distinct)):
+        path.write_text("\n".join(lines) + "\n")
+    return paths
+
+
 def _views(folder: Path) -> list[tuple[Path, float, float]]:
-    rows = (folder / "views.csv").read_text().splitlines()[1:]
+    rows = (folder / "views.csv").read_text().splitlines()[1:]  # pan, tilt: the 2nd, 3rd
     cells = [row.split(",") for row in rows]
     return [(folder / c[0], float(c[1]), float(c[2])) for c in cells]
 
@@ -153,6 +173,9 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=3,
                         help="Runs of gsrwt and of the floor, alternating; the best counts.")
     parser.add_argument("--keep", type=Path, help="Use (and keep) this directory for the data.")
+    parser.add_argument("--lens", action="store_true",
+                        help="Also time the images through a plumb_bob lens (one remap pass), "
+                             "with repeated poses (cached maps) and with distinct ones.")
     parser.add_argument("--stage", choices=["floor", "skimage", "memory"], help=argparse.SUPPRESS)
     parser.add_argument("--folder", type=Path, help=argparse.SUPPRESS)
     parser.add_argument("--out", type=Path, help=argparse.SUPPRESS)
@@ -180,7 +203,11 @@ def main() -> None:
                   "--overwrite"],
         "floor": [*me, "--stage", "floor", "--out", str(root / "floor")],
     }
-    runs: dict[str, list[float]] = {"gsrwt": [], "floor": []}
+    if args.lens:
+        for name, sidecar in zip(("lens, repeated poses", "lens, distinct poses"),
+                                 write_lens_sidecars(folder)):
+            commands[name] = [*commands["gsrwt"][:4], str(sidecar), *commands["gsrwt"][5:]]
+    runs: dict[str, list[float]] = {name: [] for name in commands}
     for _ in range(args.repeat):
         for name, command in commands.items():
             runs[name].append(timed(command))
@@ -198,6 +225,10 @@ def main() -> None:
         print(f"  {name:8s} {results[name]:6.2f} s  {rate[name]:6.2f} images/s")
     print(f"gsrwt time / I/O floor time:   {results['gsrwt'] / results['floor']:.2f}"
           "  (goal <= 1.5)")
+    for name, goal in (("lens, repeated poses", 1.45), ("lens, distinct poses", 1.6)):
+        if name in results:
+            print(f"{name} / I/O floor: {results[name] / results['floor']:.2f}"
+                  f"  (goal <= {goal}; {args.images / results[name]:.2f} images/s)")
     print(f"skimage time / gsrwt time:     {results['skimage'] / results['gsrwt']:.2f}"
           "  (goal >= 5)")
     print(f"gsrwt worker peak memory:      {(peak - idle) / 1024:.0f} MiB above its idle "

@@ -11,8 +11,8 @@ second warp.
 
 from __future__ import annotations
 
+from collections import OrderedDict
 from dataclasses import dataclass
-from functools import lru_cache
 
 import cv2
 import numpy as np
@@ -71,8 +71,9 @@ class LensDistortion:
         return self._pixels(ideal.reshape(-1, 2))
 
     def maps(self, output_from_ideal: np.ndarray, size: tuple[int, int]):
-        """Fixed-point maps of every output pixel to its (distorted) input pixel for
-        ``cv2.remap``: output -> ideal input pixel (the homography's inverse) -> lens.
+        """Maps (x, y; 32-bit float, which ``cv2.remap`` samples faster than fixed-point maps,
+        measured) of every output pixel to its (distorted) input pixel: output -> ideal input
+        pixel (the homography's inverse) -> lens.
 
         ``cv2.initUndistortRectifyMap`` computes ``K distort((newK R)^-1 o)``; with ``newK = I``
         and ``R = output_from_ideal @ K`` that is the lens applied to ``K^-1 H^-1 o``. OpenCV
@@ -83,22 +84,54 @@ class LensDistortion:
         if k[0, 1] == 0:
             initialize = (cv2.fisheye.initUndistortRectifyMap if self.fisheye
                           else cv2.initUndistortRectifyMap)
-            return initialize(k, self._d, rotation, np.eye(3), size, cv2.CV_16SC2)
+            return initialize(k, self._d, rotation, np.eye(3), size, cv2.CV_32FC1)
         width, height = size
         cols, rows = np.meshgrid(np.arange(width, dtype=np.float64),
                                  np.arange(height, dtype=np.float64))
         outputs = np.column_stack([cols.ravel(), rows.ravel()])
         sources = self.distort(map_points(np.linalg.inv(output_from_ideal), outputs))
         sources = np.nan_to_num(sources, nan=-1e6, posinf=-1e6, neginf=-1e6)
-        map_x = sources[:, 0].reshape(height, width).astype(np.float32)
-        map_y = sources[:, 1].reshape(height, width).astype(np.float32)
-        return cv2.convertMaps(map_x, map_y, cv2.CV_16SC2)
+        return (sources[:, 0].reshape(height, width).astype(np.float32),
+                sources[:, 1].reshape(height, width).astype(np.float32))
 
 
-@lru_cache(maxsize=4)
-def _cached_maps(lens: LensDistortion, homography: bytes, size: tuple[int, int]):
-    """A worker's maps by (camera, pose, frame): a pan-tilt unit revisits the same poses."""
-    return lens.maps(np.frombuffer(homography, dtype=np.float64).reshape(3, 3), size)
+#: Bytes of remap maps a process keeps for poses it may see again (a 12-megapixel frame's
+#: maps take 96 MB, a 640x480 one's 2.5 MB): a robot's small frames keep hundreds of poses,
+#: while big photos, whose poses rarely repeat, do not grow a worker by more than this.
+MAP_CACHE_BYTES = 200 * 2**20
+
+
+class _MapCache:
+    """A process's maps by (camera, pose, frame), least recently used first out, within
+    :data:`MAP_CACHE_BYTES`: a pan-tilt unit revisits the same poses thousands of times."""
+
+    def __init__(self, budget: int) -> None:
+        self.budget = budget
+        self.entries: OrderedDict[tuple, tuple[np.ndarray, np.ndarray]] = OrderedDict()
+        self.hits = self.misses = 0
+
+    def get(self, lens: LensDistortion, homography: np.ndarray, size: tuple[int, int]):
+        key = (lens, homography.tobytes(), size)
+        if key in self.entries:
+            self.hits += 1
+            self.entries.move_to_end(key)
+            return self.entries[key]
+        self.misses += 1
+        maps = lens.maps(homography, size)
+        self.entries[key] = maps
+        while len(self.entries) > 1 and self._bytes() > self.budget:
+            self.entries.popitem(last=False)
+        return maps
+
+    def _bytes(self) -> int:
+        return sum(a.nbytes + b.nbytes for a, b in self.entries.values())
+
+    def clear(self) -> None:
+        self.entries.clear()
+        self.hits = self.misses = 0
+
+
+MAP_CACHE = _MapCache(MAP_CACHE_BYTES)
 
 
 @dataclass(frozen=True)
@@ -163,7 +196,7 @@ class PixelMap:
                                          flags=interpolation, borderMode=cv2.BORDER_CONSTANT,
                                          borderValue=fill)
         else:  # one pass: output -> wall -> camera ray -> lens -> input pixel
-            map_xy, map_fraction = _cached_maps(self.lens, homography.tobytes(), self.size)
+            map_xy, map_fraction = MAP_CACHE.get(self.lens, homography, self.size)
             warped = cv2.remap(pixels, map_xy, map_fraction, interpolation, dst=out,
                                borderMode=cv2.BORDER_CONSTANT, borderValue=fill)
         polygon = self.beyond_horizon()
