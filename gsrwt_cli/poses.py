@@ -83,11 +83,11 @@ class PoseAngles(NamedTuple):
 # --------------------------------------------------------------------------------------------
 
 
-def _finite_angle(name: str, value: float) -> float:
+def _finite_number(name: str, value: float, what: str = "a number of degrees") -> float:
     try:
         number = float(value)
     except (TypeError, ValueError) as exc:
-        raise PoseError(f"{name} must be a number of degrees, got {value!r}") from exc
+        raise PoseError(f"{name} must be {what}, got {value!r}") from exc
     if not math.isfinite(number):
         raise PoseError(f"{name} must be finite, got {number!r}")
     return number
@@ -161,9 +161,9 @@ def rotation_from_pose(pan: float, tilt: float, roll: float = 0.0) -> Matrix:
     :func:`gsrwt_cli.geometry.camera_from_world` (Eq. 3.8). Any finite angles are accepted
     (it is a formula); only pan and tilt strictly within (-90, 90) keep the wall in front.
     """
-    alpha = math.radians(_finite_angle("pan", pan))
-    beta = math.radians(_finite_angle("tilt", tilt))
-    rho = math.radians(_finite_angle("roll", roll))
+    alpha = math.radians(_finite_number("pan", pan))
+    beta = math.radians(_finite_number("tilt", tilt))
+    rho = math.radians(_finite_number("roll", roll))
     return _rx(alpha) @ _ry(beta) @ _rz(rho)
 
 
@@ -311,8 +311,8 @@ def unit_quaternion(qw: float, qx: float, qy: float, qz: float) -> Vector:
     (rounded printouts) is normalized; any other (zero, or far from unit length: likely a
     misplaced column) raises :class:`PoseError`.
     """
-    q = np.array([_finite_angle(n, v) for n, v in zip(("qw", "qx", "qy", "qz"),
-                                                      (qw, qx, qy, qz))])
+    q = np.array([_finite_number(name, value, "a number") for name, value in
+                  zip(("qw", "qx", "qy", "qz"), (qw, qx, qy, qz))])
     norm_squared = float(q @ q)
     if abs(norm_squared - 1.0) > QUATERNION_NORM_SQUARED_TOLERANCE:
         raise PoseError(

@@ -272,6 +272,16 @@ def test_rodrigues_at_the_awkward_angles(rvec):
         np.testing.assert_allclose(back, rvec, atol=1e-15)
 
 
+def test_numpy_scalars_are_numbers():
+    assert rotation_from_pose(np.float32(10), np.int64(5), np.float64(-3)) == pytest.approx(
+        rotation_from_pose(10.0, 5.0, -3.0), abs=1e-15)
+    assert pose_from_quaternion(*np.array(quaternion_from_pose(10, 5, -3), np.float32)) == (
+        pytest.approx((10, 5, -3), abs=1e-4))
+    for bad in (math.nan, math.inf, "ten", None):
+        with pytest.raises(PoseError, match="pan"):
+            rotation_from_pose(bad, 0, 0)
+
+
 def test_rvec_shapes_opencv_returns_are_accepted():
     column = np.array([[0.1], [0.2], [-0.3]])
     assert pose_from_rvec(column) == pose_from_rvec(column.ravel()) == pose_from_rvec(
@@ -479,6 +489,30 @@ def test_roll_turns_the_whole_image_about_the_principal_point(pan, tilt, roll):
     turned = np.column_stack([unrolled[:, 0] * c + unrolled[:, 1] * s,
                               -unrolled[:, 0] * s + unrolled[:, 1] * c])
     np.testing.assert_allclose(rolled, turned, atol=1e-7)
+
+
+@pytest.mark.parametrize(("pan", "tilt", "roll"), [(20, -10, 15), (-35, 25, -160), (0, 0, 90)])
+def test_the_rectifying_rotation_for_opencv_is_the_transposed_rvec_rotation(pan, tilt, roll):
+    """For cv2.initUndistortRectifyMap the rotation from the camera to the frontal view is
+    wall_from_camera = R^T (the frontal camera's axes are the OpenCV wall's): its map sends
+    each output pixel to where cv2.projectPoints puts the same wall point."""
+    k = np.array([[500.0, 1.5, 330.0], [0.0, 520.0, 250.0], [0.0, 0.0, 1.0]])
+    distance, f = 4.0, math.sqrt(500.0 * 520.0)
+    k_out = camera_matrix(f, f, 200.0, 150.0)
+    rvec = rvec_from_pose(pan, tilt, roll)
+    rotation = cv2.Rodrigues(rvec)[0]
+    tvec = tvec_for_centre(rvec, np.array([0.0, 0.0, -distance]))
+    map_x, map_y = cv2.initUndistortRectifyMap(k, None, rotation.T, k_out, (400, 300),
+                                               cv2.CV_32FC1)
+    cols, rows = np.meshgrid(np.arange(150, 260, 20), np.arange(90, 220, 20))
+    cols, rows = cols.ravel(), rows.ravel()
+    wall = np.column_stack([(cols - 200.0) * distance / f, (rows - 150.0) * distance / f,
+                            np.zeros(len(cols))])
+    in_camera = wall @ rotation.T + tvec
+    assert np.all(in_camera[:, 2] > 0)
+    expected = project(wall, rvec, tvec, k)
+    got = np.column_stack([map_x[rows, cols], map_y[rows, cols]])
+    np.testing.assert_allclose(got, expected, atol=2e-3)
 
 
 # --------------------------------------------------------------------------------------------
