@@ -153,9 +153,6 @@ class Lens:
         return np.array([self.value(name) for name in self.opencv_names()], dtype=np.float64)
 
 
-#: OpenCV's camera axes (x right, y down, z forward) to the thesis's (X up, Y right, Z forward),
-#: ``X = -y_cv, Y = x_cv, Z = z_cv`` (spec section 6); the same matrix maps wall frames.
-THESIS_FROM_OPENCV = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
 
 
 @dataclass(frozen=True)
@@ -232,7 +229,8 @@ class Intrinsics:
 
     def image_from_pixel(self) -> Matrix:
         """Pixel ``(col, row, 1)`` to the thesis's image frame ``(x up, y right, 1)`` at focal
-        length :attr:`focal`: ``diag(f, f, 1) @ THESIS_FROM_OPENCV @ K^-1``.
+        length :attr:`focal`: ``diag(f, f, 1) @ C @ K^-1`` (``C``: :data:`~gsrwt_cli.poses.
+        THESIS_FROM_OPENCV`).
 
         Written out so that a square-pixel camera gives exactly ``x = cy - row`` and
         ``y = col - cx``.

@@ -38,10 +38,17 @@ import yaml
 from .camera import LENS_FIELDS, LENS_MODELS, VIEW_FIELDS, Lens, View, ViewError
 from .geometry import pan_tilt_from_gsrwt
 from .messages import escape_controls, one_line, quote
+from .poses import PoseError, distance_from_tvec, pose_from_quaternion, pose_from_rvec
 from .safe_yaml import YamlInputError, load_yaml
 
 GSRWT_FIELDS = ("delta", "a", "gamma")
-NUMERIC_FIELDS = VIEW_FIELDS + LENS_FIELDS + GSRWT_FIELDS
+#: A pose as OpenCV's solvePnP gives it (camera_from_wall, OpenCV frames), or a quaternion of
+#: the same rotation (scalar first): instead of pan, tilt and roll (docs/POSES.md).
+RVEC_FIELDS = ("rvec_x", "rvec_y", "rvec_z")
+TVEC_FIELDS = ("tvec_x", "tvec_y", "tvec_z")
+QUATERNION_FIELDS = ("qw", "qx", "qy", "qz")
+POSE_FIELDS = RVEC_FIELDS + TVEC_FIELDS + QUATERNION_FIELDS
+NUMERIC_FIELDS = VIEW_FIELDS + LENS_FIELDS + POSE_FIELDS + GSRWT_FIELDS
 #: Fields whose values are words, not numbers.
 TEXT_FIELDS = ("distortion_model",)
 #: Every field a sidecar record may give.
@@ -162,6 +169,7 @@ def view_from_values(values: Mapping[str, Any], where: str) -> View:
         except ValueError as error:
             raise RecordError(where, str(error).split(" ", 1)[0], str(error)) from None
         numbers_given["pan"], numbers_given["tilt"] = pan, tilt
+    _pose_from_rotation_fields(where, numbers_given)
     for name in ("pan", "tilt"):
         if name not in numbers_given:
             raise RecordError(where, None, f"missing field '{name}'")
@@ -183,6 +191,39 @@ def view_from_values(values: Mapping[str, Any], where: str) -> View:
                 f"gamma = {implied:.2f}",
             )
     return view
+
+
+def _pose_from_rotation_fields(where: str, numbers: dict[str, float]) -> None:
+    """Fill pan, tilt and roll from an rvec or a quaternion, and distance from a tvec
+    (its distance along the wall's normal, not ``tvec_z``), in place."""
+    given = set(numbers)
+    sources = [name for name, fields in (("pan/tilt", ("pan", "tilt", "roll")),
+                                          ("rvec", RVEC_FIELDS), ("quaternion", QUATERNION_FIELDS))
+               if given & set(fields)]
+    if len(sources) > 1:
+        raise RecordError(where, None, f"give one pose, not {' and '.join(sources)}")
+    for fields in (RVEC_FIELDS, TVEC_FIELDS, QUATERNION_FIELDS):
+        missing = [name for name in fields if name not in given]
+        if given & set(fields) and missing:
+            raise RecordError(where, missing[0], f"missing field '{missing[0]}' (needed with "
+                              f"{', '.join(fields)})")
+    if given & set(TVEC_FIELDS) and not given & set(RVEC_FIELDS):
+        raise RecordError(where, "tvec_x", "a tvec needs its rvec (rvec_x, rvec_y, rvec_z)")
+    try:
+        if given & set(RVEC_FIELDS):
+            rvec = [numbers[name] for name in RVEC_FIELDS]
+            angles = pose_from_rvec(rvec)
+            if given & set(TVEC_FIELDS) and "distance" not in given:
+                numbers["distance"] = distance_from_tvec(
+                    rvec, [numbers[name] for name in TVEC_FIELDS])
+        elif given & set(QUATERNION_FIELDS):
+            angles = pose_from_quaternion(*(numbers[name] for name in QUATERNION_FIELDS))
+        else:
+            return
+    except PoseError as error:
+        field = "rvec_x" if given & set(RVEC_FIELDS) else "qw"
+        raise RecordError(where, field, str(error)) from None
+    numbers["pan"], numbers["tilt"], numbers["roll"] = angles.pan, angles.tilt, angles.roll
 
 
 def _lens_from_values(values: Mapping[str, Any], numbers: Mapping[str, float]) -> Lens | None:

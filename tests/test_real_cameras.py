@@ -280,3 +280,50 @@ def test_full_frame_follows_the_distorted_border():
     assert (wide.x1 - wide.x0) > 1.15 * (plain.x1 - plain.x0)
     assert (wide.y1 - wide.y0) > 1.15 * (plain.y1 - plain.y0)
 
+
+
+def test_sidecar_poses_from_solvepnp_and_quaternions(tmp_path):
+    """rvec/tvec columns (solvePnP's camera_from_wall) and quaternions give the pose that
+    cv2.Rodrigues and the camera built from words agree on; a wall behind is that row's
+    error."""
+    import json
+
+    from gsrwt_cli.poses import opencv_from_world_from_camera, quaternion_from_rotation
+
+    pan, tilt, roll = 25.0, -12.0, 8.0
+    up, right, forward = camera_axes(pan, tilt, roll)
+    # Rows: the camera's OpenCV axes (x right, y down, z forward) in the wall's OpenCV frame
+    # (x right = world Y, y down = -world X, z into the wall = world Z).
+    thesis_from_opencv = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+    camera_from_wall = np.stack([right, -up, forward]) @ thesis_from_opencv
+    rvec = cv2.Rodrigues(camera_from_wall)[0].ravel()
+    centre_in_wall = np.array([0.3, -0.2, -4.0])  # 4 units in front of the wall plane
+    tvec = -camera_from_wall @ centre_in_wall
+    qw, qx, qy, qz = quaternion_from_rotation(opencv_from_world_from_camera(
+        np.linalg.inv(np.stack([up, right, forward]))))
+    (tmp_path / "poses.csv").write_text(
+        "image,focal,rvec_x,rvec_y,rvec_z,tvec_x,tvec_y,tvec_z,qw,qx,qy,qz\n"
+        f"a.png,300,{','.join(map(str, rvec))},{','.join(map(str, tvec))},,,,\n"
+        f"b.png,300,,,,,,,{qw},{qx},{qy},{qz}\n")
+    result = run_gsrwt("params", "--sidecar", str(tmp_path / "poses.csv"), "--format", "json")
+    assert result.returncode == 0, result.stderr
+    for row in json.loads(result.stdout):
+        assert (row["pan_deg"], row["tilt_deg"], row["roll_deg"]) == pytest.approx(
+            (pan, tilt, roll), abs=1e-6), row
+    (tmp_path / "behind.csv").write_text(
+        f"image,focal,rvec_x,rvec_y,rvec_z\nc.png,300,0,{math.pi * 0.9},0\n")
+    behind = run_gsrwt("params", "--sidecar", str(tmp_path / "behind.csv"))
+    assert behind.returncode == 2
+    (line,) = behind.stderr.strip().splitlines()
+    assert "behind.csv line 2, field 'rvec_x'" in line and "not in front" in line
+
+
+def test_the_distance_of_a_tvec_is_along_the_walls_normal():
+    from gsrwt_cli.sidecar import view_from_values
+
+    # A camera turned left by 30 degrees, 2 units from the wall: tvec_z is 2 / cos 30.
+    view = view_from_values({"rvec_x": 0, "rvec_y": math.pi / 6, "rvec_z": 0, "tvec_x": 0,
+                             "tvec_y": 0, "tvec_z": 2 / math.cos(math.pi / 6), "focal": 300},
+                            "hand-worked")
+    assert (view.pan, view.tilt, view.roll) == pytest.approx((30, 0, 0))
+    assert view.distance == pytest.approx(2.0)
