@@ -88,6 +88,7 @@ class Settings:
     overwrite: bool = False
     dry_run: bool = False
     max_input_pixels: float = DEFAULT_MAX_INPUT_PIXELS
+    antialias: bool = True
     root: Path | None = None  # the output directory: nothing is written outside it
     #: Words an error in the caller's terms (a module-level function: it goes to workers).
     describe: Describe | None = None
@@ -212,7 +213,8 @@ def process_job(job: Job, settings: Settings, scratch: Scratch | None = None) ->
             )
             if not settings.dry_run:
                 warped = scratch.warp(
-                    info.pixel_map, settings.interpolation, settings.fill, settings.alpha
+                    info.pixel_map, settings.interpolation, settings.fill, settings.alpha,
+                    settings.antialias,
                 )
                 encoded = encode_image(warped, job.output.suffix, settings.quality)
                 del warped

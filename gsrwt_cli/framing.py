@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .camera import View
-from .geometry import Matrix, map_points
+from .geometry import Matrix, local_stretch, map_points
 from .pixelmap import LensDistortion, PixelMap
 
 
@@ -117,25 +117,6 @@ def _whole_pixels(length: float) -> int:
 def default_frame(view: View, scale: float = 1.0) -> Frame:
     """The thesis's bounding box (Fig. 5.7): the input's size at frontal resolution."""
     return Frame(0.0, 0.0, float(view.width), float(view.height), scale)
-
-
-def local_stretch(homography: Matrix, points: np.ndarray) -> np.ndarray:
-    """Largest singular value of the homography's Jacobian at ``(N, 2)`` points.
-
-    How many output pixels one input pixel is stretched over, in the direction where that is
-    largest: ``J = (H[:2, :2] - o h^T) / w`` with ``o`` the mapped point and ``h = H[2, :2]``.
-    """
-    h = np.asarray(homography, dtype=np.float64)
-    homogeneous = points @ h[:, :2].T + h[:, 2]
-    w = homogeneous[:, 2]
-    mapped = homogeneous[:, :2] / w[:, None]
-    a = (h[0, 0] - mapped[:, 0] * h[2, 0]) / w
-    b = (h[0, 1] - mapped[:, 0] * h[2, 1]) / w
-    c = (h[1, 0] - mapped[:, 1] * h[2, 0]) / w
-    d = (h[1, 1] - mapped[:, 1] * h[2, 1]) / w
-    squares = a * a + b * b + c * c + d * d
-    determinant = a * d - b * c
-    return np.sqrt((squares + np.sqrt(np.maximum(squares**2 - 4 * determinant**2, 0))) / 2)
 
 
 def full_frame(

@@ -105,6 +105,33 @@ def map_points_backward(dst_from_src: ArrayLike, points: ArrayLike) -> Points:
     return map_points(np.linalg.inv(_as_matrix(dst_from_src)), points)
 
 
+def local_stretch(homography: ArrayLike, points: ArrayLike) -> NDArray[np.float64]:
+    """Largest singular value of the homography's Jacobian at ``(N, 2)`` points.
+
+    How many destination pixels one source pixel is stretched over, in the direction where
+    that is largest: ``J = (H[:2, :2] - o h^T) / w`` with ``o`` the mapped point and
+    ``h = H[2, :2]``.
+    """
+    h = _as_matrix(homography)
+    homogeneous = _as_points(points) @ h[:, :2].T + h[:, 2]
+    w = homogeneous[:, 2]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        mapped = homogeneous[:, :2] / w[:, None]
+        a = (h[0, 0] - mapped[:, 0] * h[2, 0]) / w
+        b = (h[0, 1] - mapped[:, 0] * h[2, 1]) / w
+        c = (h[1, 0] - mapped[:, 1] * h[2, 0]) / w
+        d = (h[1, 1] - mapped[:, 1] * h[2, 1]) / w
+    return largest_singular_value(a, b, c, d)
+
+
+def largest_singular_value(a, b, c, d) -> NDArray[np.float64]:
+    """The largest singular value of the 2x2 matrices ``[[a, b], [c, d]]`` (arrays)."""
+    squares = a * a + b * b + c * c + d * d
+    determinant = a * d - b * c
+    with np.errstate(invalid="ignore"):
+        return np.sqrt((squares + np.sqrt(np.maximum(squares**2 - 4 * determinant**2, 0))) / 2)
+
+
 def homogeneous_w(dst_from_src: ArrayLike, points: ArrayLike) -> NDArray[np.float64]:
     """The homogeneous ``w`` of each mapped point; it is 0 on the transform's singular line."""
     matrix = _as_matrix(dst_from_src)

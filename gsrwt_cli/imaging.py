@@ -340,12 +340,14 @@ def warp_working(
     fill: float = 0.0,
     alpha: bool = False,
     out: np.ndarray | None = None,
+    antialias: bool = False,
 ) -> Working:
     """Resample the pixels through ``pixel_map`` (:meth:`PixelMap.warp`, one OpenCV pass).
 
     Output pixels with no source (outside the input, or beyond the wall's horizon) get
     ``fill`` (in the image's own units), opaque, or transparent with ``alpha``. ``out``: an
-    array of the output's shape and type to write into (see :class:`Scratch`).
+    array of the output's shape and type to write into (see :class:`Scratch`). ``antialias``:
+    area-filter where the map shrinks the input (:meth:`PixelMap.warp`).
     """
     pixels = source.pixels
     channels = 1 if pixels.ndim == 2 else pixels.shape[2]
@@ -353,7 +355,7 @@ def warp_working(
     if channels == 4:
         border.append(0.0 if alpha else _full_value(pixels.dtype))
     fill_values = tuple(border + [0.0] * (4 - len(border)))
-    warped = pixel_map.warp(pixels, INTERPOLATIONS[interpolation], fill_values, out)
+    warped = pixel_map.warp(pixels, INTERPOLATIONS[interpolation], fill_values, out, antialias)
     return Working(warped, source.padded)
 
 
@@ -370,13 +372,15 @@ def warp_image(
     interpolation: str = "linear",
     fill: float = 0.0,
     alpha: bool = False,
+    antialias: bool = False,
 ) -> np.ndarray:
     """Warp ``image`` (any depth; grey, BGR or BGRA) into a new array: see :func:`warp_working`.
 
     With ``alpha`` the result has an alpha channel (added if the image had none).
     """
     source = to_working(image, alpha)
-    return from_working(warp_working(source, pixel_map, interpolation, fill, alpha))
+    return from_working(warp_working(source, pixel_map, interpolation, fill, alpha,
+                                     antialias=antialias))
 
 
 class Scratch:
@@ -424,6 +428,7 @@ class Scratch:
         interpolation: str = "linear",
         fill: float = 0.0,
         alpha: bool = False,
+        antialias: bool = False,
     ) -> Working:
         """Warp the image :meth:`read` decoded (see :func:`warp_working`)."""
         image, self._decoded = self._decoded, None
@@ -440,7 +445,7 @@ class Scratch:
             source = to_working(image, alpha)
         out_shape = (height, width, *source.pixels.shape[2:])
         out = self.array(0, out_shape, source.pixels.dtype)
-        return warp_working(source, pixel_map, interpolation, fill, alpha, out)
+        return warp_working(source, pixel_map, interpolation, fill, alpha, out, antialias)
 
 
 # --------------------------------------------------------------------------------------------

@@ -11,13 +11,14 @@ second warp.
 
 from __future__ import annotations
 
+import math
 from collections import OrderedDict
 from dataclasses import dataclass
 
 import cv2
 import numpy as np
 
-from .geometry import Matrix, map_points
+from .geometry import Matrix, largest_singular_value, local_stretch, map_points
 
 _POINT_CRITERIA = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 50, 1e-12)
 
@@ -177,34 +178,94 @@ class PixelMap:
         polygon = _clip_to_half_plane(corners, line)
         return np.array(polygon) if len(polygon) >= 3 else None
 
+    def shrink(self, step: int = 8) -> np.ndarray:
+        """Input pixels per output pixel (the largest singular value of the output-to-input
+        Jacobian) on a grid of every ``step``-th output pixel, shape ``(rows, cols)``."""
+        width, height = self.size
+        cols = np.arange(0, width + step - 1, step, dtype=np.float64).clip(max=width - 1)
+        rows = np.arange(0, height + step - 1, step, dtype=np.float64).clip(max=height - 1)
+        grid = np.stack(np.meshgrid(cols, rows), axis=-1).reshape(-1, 2)
+        if self.lens is None:
+            values = local_stretch(np.linalg.inv(self.output_from_input), grid)
+        else:  # finite differences of the map through the lens
+            here, right, down = (self.to_input(grid + offset)
+                                 for offset in ((0, 0), (0.5, 0), (0, 0.5)))
+            a, c = ((right - here) * 2).T
+            b, d = ((down - here) * 2).T
+            values = largest_singular_value(a, b, c, d)
+        values = np.nan_to_num(values, nan=1.0, posinf=1.0)
+        return values.reshape(len(rows), len(cols))
+
     def warp(
         self,
         pixels: np.ndarray,
         interpolation: int,
         fill: tuple[float, ...],
         out: np.ndarray | None = None,
+        antialias: bool = False,
     ) -> np.ndarray:
         """Backward-map ``pixels`` into the output in one OpenCV pass (thesis Sec. 5.1).
 
         ``interpolation``: an OpenCV flag; ``fill``: the 4 channel values of output pixels
         with no source (outside the input or beyond the horizon); ``out``: an array of the
-        output's shape and type to write into.
+        output's shape and type to write into. ``antialias``: where an output pixel spans
+        more than :data:`ANTIALIAS_SHRINK` input pixels, sample a Gaussian pyramid of the
+        input at the level of the local shrink, blended between levels (area filtering
+        without a per-pixel loop); nothing changes, and nothing is spent, where no part of
+        the output shrinks that much.
         """
-        homography = np.ascontiguousarray(self.output_from_input, dtype=np.float64)
-        if self.lens is None:
-            warped = cv2.warpPerspective(pixels, homography, self.size, dst=out,
-                                         flags=interpolation, borderMode=cv2.BORDER_CONSTANT,
-                                         borderValue=fill)
-        else:  # one pass: output -> wall -> camera ray -> lens -> input pixel
-            map_xy, map_fraction = MAP_CACHE.get(self.lens, homography, self.size)
-            warped = cv2.remap(pixels, map_xy, map_fraction, interpolation, dst=out,
-                               borderMode=cv2.BORDER_CONSTANT, borderValue=fill)
+        levels = 0
+        if antialias:
+            level_map = np.log2(np.maximum(self.shrink(), 1.0))
+            if level_map.max() > math.log2(ANTIALIAS_SHRINK):
+                levels = min(int(math.ceil(level_map.max())), 8)
+        warped = self._resample(pixels, 0, interpolation, fill, out)
+        if levels:
+            level = cv2.resize(level_map.astype(np.float32), self.size,
+                               interpolation=cv2.INTER_LINEAR)
+            # Coarser levels repeat the image's edge outward, so that their blur does not
+            # pull the fill (or transparency) inward; outside the image the output stays the
+            # fill, where the finest level put it.
+            inside = np.full(pixels.shape[:2], 255, np.uint8)
+            outside = self._resample(inside, 0, cv2.INTER_LINEAR, (0.0,) * 4, None) == 0
+            pyramid = pixels
+            for index in range(1, levels + 1):
+                pyramid = cv2.pyrDown(pyramid)
+                coarser = self._resample(pyramid, index, interpolation, fill, None,
+                                         cv2.BORDER_REPLICATE)
+                weight = np.clip(level - (index - 1), 0.0, 1.0)
+                weight[outside] = 0.0
+                _blend(warped, coarser, weight)
         polygon = self.beyond_horizon()
         if polygon is not None:
             scale = 256  # 8 fractional bits
             points = np.round((polygon + 0.5) * scale - 0.5).astype(np.int32)
             cv2.fillPoly(warped, [points], fill, lineType=cv2.LINE_8, shift=8)
         return warped
+
+    def _resample(self, pixels: np.ndarray, level: int, interpolation: int,
+                  fill: tuple[float, ...], out: np.ndarray | None,
+                  border: int = cv2.BORDER_CONSTANT) -> np.ndarray:
+        """One OpenCV pass from pyramid ``level`` of the input (``2^level`` pixels per pixel,
+        centres at ``(p + 0.5) / 2^level - 0.5``)."""
+        homography = np.ascontiguousarray(self.output_from_input, dtype=np.float64)
+        factor = 0.5**level
+        if self.lens is None:
+            if level:
+                level_from_input = np.array([[factor, 0.0, 0.5 * factor - 0.5],
+                                             [0.0, factor, 0.5 * factor - 0.5],
+                                             [0.0, 0.0, 1.0]])
+                homography = homography @ np.linalg.inv(level_from_input)
+            return cv2.warpPerspective(pixels, homography, self.size, dst=out,
+                                       flags=interpolation, borderMode=border,
+                                       borderValue=fill)
+        # one pass: output -> wall -> camera ray -> lens -> input pixel
+        map_x, map_y = MAP_CACHE.get(self.lens, homography, self.size)
+        if level:
+            map_x = (map_x + 0.5) * factor - 0.5
+            map_y = (map_y + 0.5) * factor - 0.5
+        return cv2.remap(pixels, map_x, map_y, interpolation, dst=out, borderMode=border,
+                         borderValue=fill)
 
     def table_columns(self) -> dict[str, object]:
         """The rectify table's geometry columns: ``out_width``, ``out_height``, ``homography``
@@ -214,6 +275,23 @@ class PixelMap:
             "out_height": self.size[1],
             "homography": " ".join(f"{value:.12g}" for value in self.output_from_input.ravel()),
         }
+
+
+#: Output pixels spanning more input pixels than this are filtered (``antialias``).
+ANTIALIAS_SHRINK = 1.5
+
+
+def _blend(into: np.ndarray, other: np.ndarray, weight: np.ndarray) -> None:
+    """``into = (1 - weight) into + weight other``, per pixel, in place."""
+    if into.dtype in (np.uint8, np.float32):
+        into[...] = cv2.blendLinear(into, other, (1.0 - weight).astype(np.float32),
+                                    weight.astype(np.float32))
+        return
+    weights = weight[..., None] if into.ndim == 3 else weight
+    mixed = into.astype(np.float32) * (1.0 - weights) + other.astype(np.float32) * weights
+    if np.issubdtype(into.dtype, np.integer):
+        mixed = np.rint(mixed)
+    into[...] = mixed.astype(into.dtype)
 
 
 def _clip_to_half_plane(polygon: list[tuple[float, float]], line: np.ndarray):

@@ -77,6 +77,7 @@ def rectify_image(
     interpolation: str = "linear",
     fill: float = 0.0,
     alpha: bool = False,
+    antialias: bool = True,
 ) -> tuple[np.ndarray, RectifyInfo]:
     """The canonical frontal view of the wall in ``image`` (thesis Ch. 5.1).
 
@@ -84,12 +85,14 @@ def rectify_image(
     16-bit or float). ``view``: the camera; its size, if given, must match the image.
     By default the output has the input's size at frontal resolution (one pixel = Zc/f wall
     units), upright and centred on where the optical axis meets the wall (Fig. 5.7);
-    pan = tilt = 0 returns the input unchanged. Raises ``ValueError`` for impossible requests.
+    pan = tilt = 0 returns the input unchanged. ``antialias``: area-filter where the output
+    shrinks the input (:meth:`~gsrwt_cli.pixelmap.PixelMap.warp`). Raises ``ValueError`` for
+    impossible requests.
     """
     height, width = image.shape[:2]
     info = plan_image(
         view, width, height, bbox=bbox, scale=scale, px_per_unit=px_per_unit,
         max_stretch=max_stretch, max_pixels=max_pixels,
     )
-    output = warp_image(image, info.pixel_map, interpolation, fill, alpha)
+    output = warp_image(image, info.pixel_map, interpolation, fill, alpha, antialias)
     return output, info

@@ -271,6 +271,9 @@ def open_table(path: str) -> Iterator[IO[str]]:
               show_default=True)
 @click.option("--fill", type=float, default=0.0, show_default=True,
               help="Value of pixels with no source, in the image's units (0-255, 0-65535).")
+@click.option("--antialias/--no-antialias", default=True, show_default=True,
+              help="Area-filter where the output shrinks the input (an output pixel over 1.5 "
+                   "input pixels), so that fine detail does not alias.")
 @click.option("--alpha", is_flag=True,
               help="Make pixels with no source transparent (adds an alpha channel).")
 @click.option("--ext", default=None,
@@ -290,7 +293,7 @@ def rectify(
     max_stretch: float, scale: float | None, px_per_unit: float | None, max_pixels: str,
     interpolation: str, fill: float, alpha: bool, ext: str | None, quality: int,
     table_path: str | None, jobs: int | None, overwrite: bool, dry_run: bool, quiet: bool,
-    max_input_pixels: str, **view_kwargs: Any,
+    max_input_pixels: str, antialias: bool, **view_kwargs: Any,
 ) -> None:
     """Rectify images into canonical frontal views of the wall they show (GS-RWT).
 
@@ -363,6 +366,7 @@ def rectify(
         max_pixels=pixel_limit, interpolation=interpolation, fill=fill, alpha=alpha,
         quality=quality, overwrite=overwrite, dry_run=dry_run,
         max_input_pixels=input_pixel_limit, root=outdir, describe=describe_error,
+        antialias=antialias,
     )
     processes = jobs or os.cpu_count() or 1
     tqdm.monitor_interval = 0  # no monitor thread: workers may fork from this process
