@@ -77,7 +77,7 @@ _RESOLUTION_KEY = "cameraResolution"
 _MODEL_KEY = "distortion_model"
 
 _OPENCV_SIGNS = re.compile(
-    rb"\A\s*(%YAML:|<\?xml|<opencv_storage>)|!!opencv-matrix|\"opencv-matrix\""
+    rb"\A\s*(%YAML:|<\?xml|<opencv_storage>)|!!opencv-(nd-)?matrix|\"opencv-(nd-)?matrix\""
 )
 _XML_TAG = re.compile(r"<(/?)[A-Za-z_][^\s/>]*[^>]*?(/?)>")
 _CV_WHERE = re.compile(r"^\((\d+)\): (.*)$", re.DOTALL)
@@ -245,14 +245,21 @@ def _one_of(
 def _opencv_matrix(
     path: str | Path, key: str, node: cv2.FileNode, shape: tuple[int, int] | None
 ) -> np.ndarray:
-    """An ``opencv-matrix`` node as float64, its size checked before OpenCV allocates it.
-
-    ``shape`` None: a vector (one row or one column) of at most 14 values.
+    """An ``opencv-matrix`` node (or an ``opencv-nd-matrix`` of 1 or 2 dimensions, as
+    ``FileStorage.write`` stores a 1-D numpy array) as float64, its size checked before
+    OpenCV allocates it. ``shape`` None: a vector (one row or column) of at most 14 values.
     """
     if not node.isMap() or node.getNode("data").isNone():
         raise CalibrationError(path, key, "expected an opencv-matrix (rows, cols, dt, data)")
-    rows = _opencv_number(path, f"{key}.rows", node.getNode("rows"))
-    cols = _opencv_number(path, f"{key}.cols", node.getNode("cols"))
+    sizes = node.getNode("sizes")
+    if not sizes.isNone():  # opencv-nd-matrix
+        if not sizes.isSeq() or sizes.size() not in (1, 2):
+            raise CalibrationError(path, key, "expected sizes of 1 or 2 dimensions")
+        dims = [_opencv_number(path, f"{key}.sizes", sizes.at(i)) for i in range(sizes.size())]
+        rows, cols = (1.0, dims[0]) if len(dims) == 1 else dims
+    else:
+        rows = _opencv_number(path, f"{key}.rows", node.getNode("rows"))
+        cols = _opencv_number(path, f"{key}.cols", node.getNode("cols"))
     if rows is None or cols is None:
         raise CalibrationError(path, key, "expected an opencv-matrix with rows and cols")
     data = node.getNode("data")
@@ -278,6 +285,8 @@ def _opencv_matrix(
             return np.zeros((0,), dtype=np.float64)
         raise CalibrationError(path, key, "not a readable matrix")
     matrix = np.asarray(matrix, dtype=np.float64)
+    if matrix.ndim == 1 and matrix.size == rows * cols:  # a 1-D opencv-nd-matrix
+        matrix = matrix.reshape(int(rows), int(cols))
     if matrix.ndim != 2 or matrix.shape != (rows, cols):  # multi-channel data, for one
         raise CalibrationError(
             path, key, f"expected {rows:g}x{cols:g} numbers of one channel, got shape "

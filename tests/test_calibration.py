@@ -404,3 +404,36 @@ def test_missing_and_directory_paths(tmp_path):
         load_camera(tmp_path / "absent.yml")
     with pytest.raises(CalibrationError, match="is a directory"):
         load_camera(tmp_path)
+
+
+def test_opencv_json_filestorage_reads_too(tmp_path):
+    camera = load_camera(DATA / "right_camera.yml")
+    storage = cv2.FileStorage("camera.json", cv2.FILE_STORAGE_WRITE | cv2.FILE_STORAGE_MEMORY)
+    storage.write("image_width", 640)
+    storage.write("image_height", 480)
+    storage.write("camera_matrix", camera.matrix())
+    storage.write("distortion_coefficients", camera.lens.opencv_coefficients())  # 1-D
+    text = storage.releaseAndGetString()
+    assert '"type_id": "opencv-nd-matrix"' in text and '"sizes": [ 5 ]' in text
+    path = tmp_path / "camera.json"
+    path.write_text(text)
+    assert intrinsics_close(load_camera(path), camera, 0)
+    # The same in YAML, where OpenCV 5 writes "%YAML 1.2" and the matrix tags say whose it is
+    yaml_path = tmp_path / "nd.yml"
+    storage = cv2.FileStorage("nd.yml", cv2.FILE_STORAGE_WRITE | cv2.FILE_STORAGE_MEMORY)
+    storage.write("camera_matrix", camera.matrix())
+    storage.write("distortion_coefficients", camera.lens.opencv_coefficients())
+    yaml_path.write_text(storage.releaseAndGetString())
+    assert yaml_path.read_text().startswith("%YAML 1.2")
+    unsized = Intrinsics(fx=camera.fx, fy=camera.fy, cx=camera.cx, cy=camera.cy, lens=camera.lens)
+    assert intrinsics_close(load_camera(yaml_path), unsized, 0)
+
+
+def test_a_loaded_camera_makes_a_view():
+    from gsrwt_cli.camera import Pose, View
+
+    camera = load_camera(DATA / "right_camera_ros.yaml")
+    view = View(intrinsics=camera, pose=Pose(20.0, -10.0), distance=14.0)
+    assert view.intrinsics is camera
+    assert view.focal == pytest.approx(math.sqrt(camera.fx * camera.fy), rel=1e-15)
+    assert (view.width, view.height, view.cx, view.cy) == (640, 480, camera.cx, camera.cy)
