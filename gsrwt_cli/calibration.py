@@ -382,6 +382,8 @@ def _ros_matrix(
                                f"{_kind(value)}")
     rows = _ros_number(path, f"{key}.rows", value["rows"])
     cols = _ros_number(path, f"{key}.cols", value["cols"])
+    if rows is None or cols is None:
+        raise CalibrationError(path, key, "expected numbers for rows and cols")
     data = value["data"]
     if not isinstance(data, list):
         raise CalibrationError(path, f"{key}.data", f"expected a list of numbers, got "

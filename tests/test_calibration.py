@@ -300,6 +300,8 @@ BAD = {
     "ros-absurd-k1": (_ros(distortion_coefficients="{rows: 1, cols: 5, data: [1.0e+9, 0, 0, 0, "
                                                    "0]}"),
                       "distortion_coefficients", "k1 must be within 1e6"),
+    "ros-empty-rows": (_ros(camera_matrix=f"{{rows: , cols: 3, data: {_K}}}"), "camera_matrix",
+                       "expected numbers for rows and cols"),
     "ros-matrix-list": (_ros(camera_matrix=_K), "camera_matrix",
                         "expected a mapping with rows, cols and data, got a list"),
     "opencv-2x3": (_opencv(matrix="rows: 2\n   cols: 3\n   dt: d\n   data: [1, 0, 0, 0, 1, 0]"),
@@ -437,3 +439,49 @@ def test_a_loaded_camera_makes_a_view():
     assert view.intrinsics is camera
     assert view.focal == pytest.approx(math.sqrt(camera.fx * camera.fy), rel=1e-15)
     assert (view.width, view.height, view.cx, view.cy) == (640, 480, camera.cx, camera.cy)
+
+
+_FUZZ = """
+import collections, os, sys, tempfile
+import numpy as np
+from gsrwt_cli.calibration import CalibrationError, load_camera
+rng = np.random.default_rng(11)
+sources = [open(name, "rb").read() for name in sys.argv[1:]]
+alphabet = b"[]{}<>/:,- \\n\\t0123456789.eE+!%\\"'&*abcdefxyz"
+counts = collections.Counter()
+folder = tempfile.mkdtemp()
+for trial in range(1200):
+    data = bytearray(sources[trial % len(sources)])
+    for _ in range(int(rng.integers(1, 10))):
+        position = int(rng.integers(0, len(data)))
+        byte = alphabet[int(rng.integers(0, len(alphabet)))] if rng.random() < 0.8 else int(
+            rng.integers(0, 256))
+        operation = int(rng.integers(0, 3))
+        if operation == 0:
+            data[position] = byte
+        elif operation == 1:
+            data.insert(position, byte)
+        else:
+            del data[position]
+    path = os.path.join(folder, "camera" + os.path.splitext(sys.argv[1 + trial % len(sources)])[1])
+    open(path, "wb").write(data)
+    try:
+        load_camera(path)
+        counts["read"] += 1
+    except CalibrationError:
+        counts["refused"] += 1
+print(counts["read"], counts["refused"])
+"""
+
+
+def test_damaged_calibration_files_are_read_or_refused_never_a_crash():
+    # 1200 copies of the four real files with bytes changed, inserted or deleted: each reads
+    # or raises CalibrationError (any other exception fails the run), in a subprocess so
+    # that a crash inside OpenCV's parser fails the test instead of ending the run.
+    names = [str(DATA / name) for name in (*CAMERA_FILES, "opencv4_left_intrinsics.yml")]
+    done = subprocess.run([sys.executable, "-c", _FUZZ, *names], capture_output=True, text=True,
+                          timeout=120)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert done.stderr == ""  # OpenCV printed nothing either
+    read, refused = map(int, done.stdout.split())
+    assert read + refused == 1200 and read > 20 and refused > 600
