@@ -91,8 +91,9 @@ def test_not_a_jpeg_or_damaged_between_segments():
 
 @pytest.mark.parametrize(
     "trailer",
-    [_mp4(), b"MotionPhoto_Data" + _mp4(2) + b"SEFT", ENCODINGS["baseline"] + b"\x00\x01"],
-    ids=["google-motion-photo", "samsung-motion-photo", "mpo-second-picture"],
+    [_mp4(), b"MotionPhoto_Data" + _mp4(2) + b"SEFT", ENCODINGS["baseline"] + b"\x00\x01",
+     bytes(4096)],
+    ids=["google-motion-photo", "samsung-motion-photo", "mpo-second-picture", "nul-padding"],
 )
 def test_decode_gives_the_same_pixels_with_data_after_the_end(trailer):
     jpeg = PHOTO.read_bytes()
