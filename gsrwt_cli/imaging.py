@@ -199,11 +199,20 @@ def measure_image_file(path: str | Path, max_pixels: float) -> tuple[int, int]:
 
 
 def _check_complete(data: bytes) -> None:
-    """Refuse empty files, and truncated JPEG and PNG files (OpenCV decodes those partially)."""
+    """Refuse empty files, and truncated JPEG and PNG files (OpenCV decodes those partially).
+
+    A JPEG is complete when its stream reaches its end-of-image marker, wherever the file
+    ends: phones append a video (motion photos) or a second picture (MPO) after it. The last
+    bytes are checked first (no cost for the usual file), else the stream's markers are walked
+    (:func:`~gsrwt_cli.jpeg_stream.jpeg_stream_end`, about 2 ms for a 12 MP file).
+    """
+    from .jpeg_stream import jpeg_stream_end  # imported here: this function is all it needs
+
     if not data:
         raise ImageError("empty file")
     head, tail = data[:8], data[-64:].rstrip(b"\x00")
-    if head[:3] == b"\xff\xd8\xff" and not tail.endswith(b"\xff\xd9"):
+    if (head[:3] == b"\xff\xd8\xff" and not tail.endswith(b"\xff\xd9")
+            and jpeg_stream_end(data) is None):
         raise ImageError("truncated JPEG (no end-of-image marker)")
     if head == b"\x89PNG\r\n\x1a\n" and b"IEND" not in tail:
         raise ImageError("truncated PNG (no IEND chunk)")

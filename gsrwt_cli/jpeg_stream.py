@@ -1,0 +1,72 @@
+"""Where a JPEG stream ends, found by walking its markers, whatever follows it in the file.
+
+Phones append data after a JPEG's end-of-image marker (EOI, ``FF D9``): a "motion photo"
+carries an MP4 video there (Google's ``MicroVideo``/``MotionPhoto``, Samsung's
+``MotionPhoto_Data``), a multi-picture file (MPO) a second JPEG. The image is complete; only
+its last bytes are not ``FF D9``. Searching the file for ``FF D9`` would not tell where the
+image ends: an EXIF thumbnail before the image data ends with ``FF D9`` too, and a video after
+it holds those two bytes anywhere.
+
+:func:`jpeg_stream_end` walks the stream as a decoder reads it (ITU-T T.81, Annex B): from
+the start-of-image marker, marker segments by their lengths (APPn, DQT, DHT, SOFn, ...), and
+after each start-of-scan (SOS) the entropy-coded data up to the next marker (in which ``FF``
+is always followed by a stuffed ``00`` or is a restart marker ``D0``-``D7``), until EOI.
+Progressive files (several scans, tables between them) and restart intervals walk the same.
+"""
+
+from __future__ import annotations
+
+import re
+
+#: A marker inside or after entropy-coded data: ``FF`` then a code that is not a stuffed
+#: ``00``, a restart marker ``D0``-``D7`` (part of the scan) or another fill byte ``FF``.
+_NEXT_MARKER = re.compile(rb"\xff[^\x00\xd0-\xd7\xff]")
+#: Markers without a length field: TEM, RST0-7, SOI (EOI ends the walk).
+_STANDALONE = frozenset({0x01, 0xD8, *range(0xD0, 0xD8)})
+_SOS, _EOI = 0xDA, 0xD9
+
+
+def jpeg_stream_end(data: bytes | bytearray | memoryview) -> int | None:
+    """The offset just past the EOI marker of the JPEG stream that starts ``data``.
+
+    None when ``data`` ends before the stream does (a truncated file), or does not start
+    with a JPEG's start-of-image marker. Bytes after the EOI are not looked at. A stream
+    that is damaged but not short (a segment length below 2, bytes between segments) is
+    walked on from the next marker, as a decoder resynchronises; the decoder then judges it.
+    Costs one scan of the entropy-coded data in C (a regular-expression search per scan).
+    """
+    data = bytes(data) if not isinstance(data, bytes) else data
+    if data[:2] != b"\xff\xd8":
+        return None
+    size, position = len(data), 2
+    while True:
+        if position >= size:
+            return None
+        if data[position] != 0xFF:  # not a marker where one must be: resynchronise
+            found = _NEXT_MARKER.search(data, position)
+            if found is None:
+                return None
+            position = found.start()
+        while position < size and data[position] == 0xFF:  # fill bytes before a marker code
+            position += 1
+        if position >= size:
+            return None
+        code = data[position]
+        position += 1
+        if code == _EOI:
+            return position
+        if code in _STANDALONE or code == 0x00:
+            continue
+        if position + 2 > size:
+            return None
+        length = int.from_bytes(data[position:position + 2], "big")
+        if length < 2:  # a bogus length: the decoder refuses it; walk on to the next marker
+            continue
+        position += length
+        if position > size:
+            return None
+        if code == _SOS:  # the scan's entropy-coded data runs to the next marker
+            found = _NEXT_MARKER.search(data, position)
+            if found is None:
+                return None
+            position = found.start()
