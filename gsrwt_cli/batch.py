@@ -22,6 +22,7 @@ import numpy as np
 
 from .camera import View
 from .executor import Executor, ProcessExecutor
+from .exif import ExifFocal, focal_from_exif
 from .imaging import (
     DEFAULT_MAX_INPUT_PIXELS,
     ImageError,
@@ -42,6 +43,7 @@ from .sources import Source
 
 RECTIFY_COLUMNS = (
     *PARAMS_COLUMNS,
+    "focal_source",
     "output",
     "out_width",
     "out_height",
@@ -159,14 +161,48 @@ def _error_text(error: BaseException, describe: Describe | None = None) -> str:
     return one_line(" ".join(text.split()), 500)
 
 
-def _view(job: Job) -> View:
+def focal_source(values: Mapping[str, Any], where: str) -> str | None:
+    """Where a job's focal length comes from: ``option``, ``sidecar`` (a sidecar row or the
+    YAML beside the image), ``camera`` (a calibration file), or None: nowhere yet (EXIF)."""
+    if any(values.get(name) not in (None, "") for name in ("focal", "fx", "fy")):
+        return "option" if where == "options" else "sidecar"
+    if values.get("camera"):
+        return "camera"
+    return None
+
+
+def _view(job: Job) -> tuple[View, str]:
+    """The job's view and where its focal length came from (EXIF read here if needed)."""
     if job.error is not None:
         raise _JobError(job.error)
     assert job.values is not None
+    values, source = dict(job.values), focal_source(job.values, job.where)
+    if source is None:
+        found = _exif_focal(job.source)
+        if found is None:
+            raise _JobError(
+                "no focal length: none in the parameters, no camera file, and no usable "
+                "focal length in the image's EXIF"
+            )
+        values["fx"], values["fy"] = found.fx, found.fy
+        source = "exif"
     try:
-        return view_from_values(job.values, job.where)
+        return view_from_values(values, job.where), source
     except RecordError as error:
         raise _JobError(str(error)) from None
+
+
+def _exif_focal(path: Path) -> ExifFocal | None:
+    """The focal length the image's EXIF gives (:func:`~gsrwt_cli.exif.focal_from_exif`)."""
+    try:
+        size = image_file_size(path)
+        if size is None:
+            return None
+        with open(path, "rb") as handle:
+            head = handle.read(1 << 20)  # EXIF lives in the first 64 KB segment
+    except OSError:
+        return None
+    return focal_from_exif(head, *size)
 
 
 def _geometry(info: RectifyInfo) -> dict[str, Any]:
@@ -196,8 +232,8 @@ def process_job(job: Job, settings: Settings, scratch: Scratch | None = None) ->
     try:
         with np.errstate(all="ignore"), warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            view = _view(job)
-            row.update(params_row(view, str(job.source)))
+            view, source = _view(job)
+            row.update(params_row(view, str(job.source)), focal_source=source)
             if job.output.exists() and not settings.overwrite:
                 return record_row(job, settings)
             if not job.source.is_file():
@@ -234,8 +270,8 @@ def record_row(job: Job, settings: Settings, status: str = "skipped") -> dict[st
     row: dict[str, Any] = {"image": str(job.source), "output": str(job.output)}
     try:
         with np.errstate(all="ignore"):
-            view = _view(job)
-            row.update(params_row(view, str(job.source)))
+            view, source = _view(job)
+            row.update(params_row(view, str(job.source)), focal_source=source)
             size = measure_image_file(job.source, settings.max_input_pixels)
             info = _plan(view, size[0], size[1], settings)
         row.update(_geometry(info), image=str(job.source), status=status)
@@ -255,7 +291,8 @@ def died_row(job: Job, reason: str) -> dict[str, Any]:
     """The row of an image whose worker died while working on it."""
     row: dict[str, Any] = {"image": str(job.source), "output": str(job.output)}
     with contextlib.suppress(Exception), np.errstate(all="ignore"):
-        row.update(params_row(_view(job), str(job.source)))
+        view, source = _view(job)
+        row.update(params_row(view, str(job.source)), focal_source=source)
     row.update(status="error", error=reason)
     return row
 

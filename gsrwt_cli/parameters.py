@@ -35,8 +35,9 @@ from .sidecar import (
     view_from_values,
 )
 
-#: The options that alone make a view (the others have defaults or are optional).
-REQUIRED_OPTIONS = ("pan", "tilt", "focal")
+#: The options that alone make a view: the pose; the focal length may come from --focal,
+#: --fx/--fy, a --camera file or the image's EXIF.
+REQUIRED_OPTIONS = ("pan", "tilt")
 
 
 class Origin(enum.Enum):

@@ -30,12 +30,23 @@ import numbers
 import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from functools import lru_cache
 from pathlib import Path, PurePosixPath
 from typing import Any
 
 import yaml
 
-from .camera import LENS_FIELDS, LENS_MODELS, VIEW_FIELDS, Lens, View, ViewError
+from .calibration import CalibrationError, load_camera
+from .camera import (
+    LENS_FIELDS,
+    LENS_MODELS,
+    VIEW_FIELDS,
+    Intrinsics,
+    Lens,
+    Pose,
+    View,
+    ViewError,
+)
 from .geometry import pan_tilt_from_gsrwt
 from .messages import escape_controls, one_line, quote
 from .poses import PoseError, distance_from_tvec, pose_from_quaternion, pose_from_rvec
@@ -49,8 +60,9 @@ TVEC_FIELDS = ("tvec_x", "tvec_y", "tvec_z")
 QUATERNION_FIELDS = ("qw", "qx", "qy", "qz")
 POSE_FIELDS = RVEC_FIELDS + TVEC_FIELDS + QUATERNION_FIELDS
 NUMERIC_FIELDS = VIEW_FIELDS + LENS_FIELDS + POSE_FIELDS + GSRWT_FIELDS
-#: Fields whose values are words, not numbers.
-TEXT_FIELDS = ("distortion_model",)
+#: Fields whose values are words, not numbers: ``camera`` names a calibration file (OpenCV
+#: or ROS, relative to the sidecar) whose intrinsics the record's own fields override.
+TEXT_FIELDS = ("distortion_model", "camera")
 #: Every field a sidecar record may give.
 SIDECAR_FIELDS = NUMERIC_FIELDS + TEXT_FIELDS
 #: How far a given gamma may stray from the one that delta and a imply (the thesis rounds to 1°).
@@ -173,12 +185,20 @@ def view_from_values(values: Mapping[str, Any], where: str) -> View:
     for name in ("pan", "tilt"):
         if name not in numbers_given:
             raise RecordError(where, None, f"missing field '{name}'")
-    if "focal" not in numbers_given and not {"fx", "fy"} <= given:
+    camera = values.get("camera")
+    if "focal" not in numbers_given and not {"fx", "fy"} <= given and not camera:
         raise RecordError(where, None, "missing field 'focal'")
     try:
         lens = _lens_from_values(values, numbers_given)
-        view = View(**{name: numbers_given[name] for name in VIEW_FIELDS if name in numbers_given},
-                    lens=lens)
+        if camera:
+            try:
+                base = load_camera_file(str(camera))
+            except CalibrationError as error:
+                raise RecordError(where, "camera", str(error)) from None
+            view = _view_with_camera(base, numbers_given, lens, values)
+        else:
+            view = View(**{name: numbers_given[name] for name in VIEW_FIELDS
+                           if name in numbers_given}, lens=lens)
     except ViewError as error:
         raise RecordError(where, error.field, str(error)) from None
     if "gamma" in numbers_given:
@@ -224,6 +244,43 @@ def _pose_from_rotation_fields(where: str, numbers: dict[str, float]) -> None:
         field = "rvec_x" if given & set(RVEC_FIELDS) else "qw"
         raise RecordError(where, field, str(error)) from None
     numbers["pan"], numbers["tilt"], numbers["roll"] = angles.pan, angles.tilt, angles.roll
+
+
+@lru_cache(maxsize=64)
+def load_camera_file(path: str) -> Intrinsics:
+    """A calibration file's intrinsics (:func:`~gsrwt_cli.calibration.load_camera`), read once
+    per process; raises :class:`~gsrwt_cli.calibration.CalibrationError`."""
+    return load_camera(path)
+
+
+def _view_with_camera(base: Intrinsics, numbers: Mapping[str, float], lens: Lens | None,
+                      values: Mapping[str, Any]) -> View:
+    """A view whose intrinsics come from a calibration file, with the record's own fields
+    (fx, fy or focal, cx, cy, skew, a lens) over the file's."""
+    fx, fy = base.fx, base.fy
+    if "focal" in numbers:
+        fx = fy = numbers["focal"]
+    fx, fy = numbers.get("fx", fx), numbers.get("fy", fy)
+    cx, cy = numbers.get("cx", base.cx), numbers.get("cy", base.cy)
+    overrides_lens = lens is not None or values.get("distortion_model")
+    intrinsics = Intrinsics(
+        fx, fy, cx, cy, numbers.get("skew", base.skew),
+        numbers.get("width", base.width), numbers.get("height", base.height),
+        lens if overrides_lens else base.lens,
+    )
+    pose = Pose(numbers["pan"], numbers["tilt"], numbers.get("roll", 0.0))
+    return View(intrinsics=intrinsics, pose=pose, distance=numbers.get("distance"))
+
+
+def _with_camera_path(sidecar: Path, values: dict[str, Any]) -> dict[str, Any]:
+    """``camera`` relative to the sidecar's directory, as a path that works from anywhere."""
+    camera = values.get("camera")
+    if camera is None or str(camera).strip() == "":
+        return values
+    camera_path = Path(str(camera).strip())
+    if not camera_path.is_absolute():
+        camera_path = sidecar.parent / camera_path
+    return {**values, "camera": str(camera_path)}
 
 
 def _lens_from_values(values: Mapping[str, Any], numbers: Mapping[str, float]) -> Lens | None:
@@ -377,7 +434,8 @@ def _csv_records(path: Path, text: str, delimiter: str) -> list[Record]:
             if not image:
                 raise SidecarError(f"{where}, field 'image': empty")
             values = {k: v for k, v in row.items() if k in SIDECAR_FIELDS}
-            records.append(Record(image=image, values=values, where=where))
+            records.append(Record(image=image, values=_with_camera_path(path, values),
+                                  where=where))
     except csv.Error as error:
         raise SidecarError(
             f"{name} line {reader.line_num}: {one_line(str(error), 200)}"
@@ -443,7 +501,8 @@ def _yaml_records(path: Path, data: Any) -> list[Record]:
         if isinstance(image, bool) or not isinstance(image, (str, int, float)):
             raise SidecarError(f"{where}, field 'image': expected a file name, got {quote(image)}")
         values = {k: v for k, v in mapping.items() if k in SIDECAR_FIELDS and v is not None}
-        records.append(Record(image=str(image), values=values, where=where, defaults=defaults))
+        records.append(Record(image=str(image), values=_with_camera_path(path, values),
+                              where=where, defaults=_with_camera_path(path, defaults)))
     return records
 
 

@@ -94,9 +94,9 @@ def test_nothing_found_lists_the_places_looked(tmp_path):
     missing = resolve(photo, load_sidecar(sidecar_path), {"pan": 1.0, "focal": 2.0})
     assert isinstance(missing, NotFound)
     assert missing.message == (
-        f"no parameters: not in {sidecar_path}, no a.yaml beside it, no --pan/--tilt/--focal"
+        f"no parameters: not in {sidecar_path}, no a.yaml beside it, no --pan/--tilt"
     )
-    assert resolve(photo).message == "no parameters: no a.yaml beside it, no --pan/--tilt/--focal"
+    assert resolve(photo).message == "no parameters: no a.yaml beside it, no --pan/--tilt"
 
 
 @pytest.mark.parametrize(
@@ -169,7 +169,7 @@ def test_plan_jobs_takes_each_kind_of_result(tmp_path):
     assert jobs[1].error == (
         f"{folder / 'bad.yaml'} line 4: key 'focal' given twice (first on line 3)"
     )
-    assert jobs[2].error == "no parameters: no none.yaml beside it, no --pan/--tilt/--focal"
+    assert jobs[2].error == "no parameters: no none.yaml beside it, no --pan/--tilt"
 
 
 def test_canonical_views_take_each_kind_of_result(tmp_path):

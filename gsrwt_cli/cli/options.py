@@ -117,7 +117,10 @@ def view_options(func: F) -> F:
     for name in reversed(VIEW_FIELDS):
         kind, text = VIEW_OPTIONS[name]
         func = click.option(f"--{name}", type=kind, help=text)(func)
-    return func
+    return click.option(
+        "--camera", type=click.Path(dir_okay=False),
+        help="Calibration file (OpenCV YAML/XML or ROS camera_info) with the intrinsics and "
+             "lens; the options and sidecar fields above override it.")(func)
 
 
 def interpolation_option(func: F) -> F:
@@ -167,4 +170,5 @@ def option_message(error: RecordError) -> str:
 
 def view_defaults(kwargs: dict[str, Any]) -> dict[str, Any]:
     """The view options the user gave, as fallback values for sidecar records."""
-    return {name: kwargs[name] for name in VIEW_FIELDS if kwargs.get(name) is not None}
+    return {name: kwargs[name] for name in (*VIEW_FIELDS, "camera")
+            if kwargs.get(name) is not None}

@@ -24,6 +24,7 @@ from ..batch import (
     run_batch,
     worker_context,
 )
+from ..calibration import CalibrationError
 from ..framing import NothingWithinStretchError, OutputTooLargeError
 from ..imaging import (
     INTERPOLATIONS,
@@ -35,7 +36,7 @@ from ..imaging import (
 from ..messages import one_line, quote
 from ..outputs import open_atomic, remove_stale_temporaries
 from ..rectify import MissingDistanceError
-from ..sidecar import SidecarError, load_sidecar
+from ..sidecar import SidecarError, load_camera_file, load_sidecar
 from ..sources import Source, source_from_listed_path, sources_from_directory
 from ..tables import TableWriter, format_from_extension, read_table
 from .options import InputError, view_defaults, view_options
@@ -349,6 +350,12 @@ def rectify(
     if not sources and not unreadable:
         raise InputError(f"no images found in {' '.join(inputs)}")
     job_list = plan_jobs(sources, outdir, loaded, view_defaults(view_kwargs), extension)
+    for camera in sorted({str(job.values["camera"]) for job in job_list
+                          if job.values and job.values.get("camera")}):
+        try:  # a bad calibration file is a usage error, found before any image is read
+            load_camera_file(camera)
+        except CalibrationError as error:
+            raise InputError(str(error)) from None
     refuse_unsafe_outputs(
         inputs, sources, [job.output for job in job_list], outdir, recursive,
         None if table_path == "-" else Path(table_path), sidecar,
