@@ -97,8 +97,9 @@ class LensDistortion:
 
 
 #: Bytes of remap maps a process keeps for poses it may see again (a 12-megapixel frame's
-#: maps take 96 MB, a 640x480 one's 2.5 MB): a robot's small frames keep hundreds of poses,
-#: while big photos, whose poses rarely repeat, do not grow a worker by more than this.
+#: maps take 96 MB, a 640x480 one's 2.5 MB): a robot's small frames keep some 80 poses;
+#: maps over a quarter of this (frames over about 6 megapixels) are rebuilt each time, since
+#: holding a few of them costs more page faults than it saves (measured).
 MAP_CACHE_BYTES = 200 * 2**20
 
 
@@ -119,6 +120,8 @@ class _MapCache:
             return self.entries[key]
         self.misses += 1
         maps = lens.maps(homography, size)
+        if sum(part.nbytes for part in maps) > self.budget // 4:
+            return maps  # too big to keep several: holding it costs more than rebuilding it
         self.entries[key] = maps
         while len(self.entries) > 1 and self._bytes() > self.budget:
             self.entries.popitem(last=False)
@@ -178,9 +181,13 @@ class PixelMap:
         polygon = _clip_to_half_plane(corners, line)
         return np.array(polygon) if len(polygon) >= 3 else None
 
-    def shrink(self, step: int = 8) -> np.ndarray:
+    def shrink(self, step: int = 8, source_size: tuple[int, int] | None = None) -> np.ndarray:
         """Input pixels per output pixel (the largest singular value of the output-to-input
-        Jacobian) on a grid of every ``step``-th output pixel, shape ``(rows, cols)``."""
+        Jacobian) on a grid of every ``step``-th output pixel, shape ``(rows, cols)``.
+
+        With ``source_size`` (the input's width and height), 1 where the output pixel has no
+        source: outside the input nothing is sampled, however much the map shrinks there.
+        """
         width, height = self.size
         cols = np.arange(0, width + step - 1, step, dtype=np.float64).clip(max=width - 1)
         rows = np.arange(0, height + step - 1, step, dtype=np.float64).clip(max=height - 1)
@@ -194,6 +201,14 @@ class PixelMap:
             b, d = ((down - here) * 2).T
             values = largest_singular_value(a, b, c, d)
         values = np.nan_to_num(values, nan=1.0, posinf=1.0)
+        if source_size is not None:
+            sources = self.to_input(grid)
+            w = grid @ np.linalg.inv(self.output_from_input)[2, :2] + np.linalg.inv(
+                self.output_from_input)[2, 2]
+            inside = (w > 0) & np.all(np.isfinite(sources), axis=1)
+            inside &= (sources[:, 0] >= -0.5) & (sources[:, 0] <= source_size[0] - 0.5)
+            inside &= (sources[:, 1] >= -0.5) & (sources[:, 1] <= source_size[1] - 0.5)
+            values = np.where(inside, values, 1.0)
         return values.reshape(len(rows), len(cols))
 
     def warp(
@@ -214,28 +229,9 @@ class PixelMap:
         without a per-pixel loop); nothing changes, and nothing is spent, where no part of
         the output shrinks that much.
         """
-        levels = 0
-        if antialias:
-            level_map = np.log2(np.maximum(self.shrink(), 1.0))
-            if level_map.max() > math.log2(ANTIALIAS_SHRINK):
-                levels = min(int(math.ceil(level_map.max())), 8)
         warped = self._resample(pixels, 0, interpolation, fill, out)
-        if levels:
-            level = cv2.resize(level_map.astype(np.float32), self.size,
-                               interpolation=cv2.INTER_LINEAR)
-            # Coarser levels repeat the image's edge outward, so that their blur does not
-            # pull the fill (or transparency) inward; outside the image the output stays the
-            # fill, where the finest level put it.
-            inside = np.full(pixels.shape[:2], 255, np.uint8)
-            outside = self._resample(inside, 0, cv2.INTER_LINEAR, (0.0,) * 4, None) == 0
-            pyramid = pixels
-            for index in range(1, levels + 1):
-                pyramid = cv2.pyrDown(pyramid)
-                coarser = self._resample(pyramid, index, interpolation, fill, None,
-                                         cv2.BORDER_REPLICATE)
-                weight = np.clip(level - (index - 1), 0.0, 1.0)
-                weight[outside] = 0.0
-                _blend(warped, coarser, weight)
+        if antialias:
+            self._antialias(pixels, warped, interpolation, fill)
         polygon = self.beyond_horizon()
         if polygon is not None:
             scale = 256  # 8 fractional bits
@@ -243,14 +239,68 @@ class PixelMap:
             cv2.fillPoly(warped, [points], fill, lineType=cv2.LINE_8, shift=8)
         return warped
 
+    def _antialias(self, pixels: np.ndarray, warped: np.ndarray, interpolation: int,
+                   fill: tuple[float, ...], step: int = 32) -> None:
+        """Blend coarser pyramid levels into ``warped`` where the map shrinks the input by
+        more than :data:`ANTIALIAS_SHRINK`. Only the output rectangle that needs it, from
+        the input rectangle it comes from, is filtered and resampled."""
+        source_size = (pixels.shape[1], pixels.shape[0])
+        level_grid = pyramid_level(self.shrink(step, source_size))
+        if level_grid.max() <= 0:
+            return
+        rows, cols = np.nonzero(level_grid > 0)
+        width, height = self.size
+        r0, r1 = max(0, rows.min() - 1), min(len(level_grid), rows.max() + 2)
+        c0, c1 = max(0, cols.min() - 1), min(len(level_grid[0]), cols.max() + 2)
+        x0, x1 = c0 * step, min(width, (c1 - 1) * step + 1)
+        y0, y1 = r0 * step, min(height, (r1 - 1) * step + 1)
+        region = self.then(np.array([[1.0, 0, -x0], [0, 1.0, -y0], [0, 0, 1]]), (x1 - x0, y1 - y0))
+        level = cv2.resize(level_grid[r0:r1, c0:c1].astype(np.float32), (x1 - x0, y1 - y0),
+                           interpolation=cv2.INTER_LINEAR)
+        levels = min(int(math.ceil(level.max())), 8)
+        # The input rectangle the region samples, with room for the pyramid's filters, at
+        # offsets that are whole pixels of the coarsest level.
+        corners = np.array([[c, r] for c in np.linspace(0, x1 - x0 - 1, 17)
+                            for r in np.linspace(0, y1 - y0 - 1, 17)])
+        sources = region.to_input(corners)
+        sources = sources[np.all(np.isfinite(sources), axis=1)]
+        if len(sources) == 0:
+            return
+        unit, margin = 2**levels, 4 * 2**levels
+        left = int(max(0, (np.floor(sources[:, 0].min()) - margin) // unit * unit))
+        top = int(max(0, (np.floor(sources[:, 1].min()) - margin) // unit * unit))
+        right = int(min(source_size[0], np.ceil(sources[:, 0].max()) + margin))
+        bottom = int(min(source_size[1], np.ceil(sources[:, 1].max()) + margin))
+        if right <= left or bottom <= top:
+            return
+        crop = pixels[top:bottom, left:right]
+        target = warped[y0:y1, x0:x1]
+        # Coarser levels repeat the image's edge outward, so that their blur does not pull
+        # the fill (or transparency) inward; outside the image the output stays the fill.
+        inside = np.full(pixels.shape[:2], 255, np.uint8)
+        outside = region._resample(inside, 0, cv2.INTER_LINEAR, (0.0,) * 4, None) == 0
+        pyramid = crop
+        for index in range(1, levels + 1):
+            pyramid = cv2.pyrDown(pyramid)
+            coarser = region._resample(pyramid, index, interpolation, fill, None,
+                                       cv2.BORDER_REPLICATE, (left, top))
+            weight = np.clip(level - (index - 1), 0.0, 1.0)
+            weight[outside] = 0.0
+            _blend(target, coarser, weight)
+
     def _resample(self, pixels: np.ndarray, level: int, interpolation: int,
                   fill: tuple[float, ...], out: np.ndarray | None,
-                  border: int = cv2.BORDER_CONSTANT) -> np.ndarray:
+                  border: int = cv2.BORDER_CONSTANT,
+                  offset: tuple[int, int] = (0, 0)) -> np.ndarray:
         """One OpenCV pass from pyramid ``level`` of the input (``2^level`` pixels per pixel,
-        centres at ``(p + 0.5) / 2^level - 0.5``)."""
+        centres at ``(p + 0.5) / 2^level - 0.5``), or of the part of the input whose first
+        pixel is ``offset`` (column, row)."""
         homography = np.ascontiguousarray(self.output_from_input, dtype=np.float64)
         factor = 0.5**level
         if self.lens is None:
+            if offset != (0, 0):
+                homography = homography @ np.array(
+                    [[1.0, 0.0, offset[0]], [0.0, 1.0, offset[1]], [0.0, 0.0, 1.0]])
             if level:
                 level_from_input = np.array([[factor, 0.0, 0.5 * factor - 0.5],
                                              [0.0, factor, 0.5 * factor - 0.5],
@@ -261,9 +311,9 @@ class PixelMap:
                                        borderValue=fill)
         # one pass: output -> wall -> camera ray -> lens -> input pixel
         map_x, map_y = MAP_CACHE.get(self.lens, homography, self.size)
-        if level:
-            map_x = (map_x + 0.5) * factor - 0.5
-            map_y = (map_y + 0.5) * factor - 0.5
+        if level or offset != (0, 0):
+            map_x = (map_x - offset[0] + 0.5) * factor - 0.5
+            map_y = (map_y - offset[1] + 0.5) * factor - 0.5
         return cv2.remap(pixels, map_x, map_y, interpolation, dst=out, borderMode=border,
                          borderValue=fill)
 
@@ -279,6 +329,16 @@ class PixelMap:
 
 #: Output pixels spanning more input pixels than this are filtered (``antialias``).
 ANTIALIAS_SHRINK = 1.5
+
+
+def pyramid_level(shrink: np.ndarray) -> np.ndarray:
+    """The pyramid level to sample at a local shrink: 0 up to :data:`ANTIALIAS_SHRINK`,
+    rising smoothly to level 1 at a shrink of 2, then ``log2(shrink)`` (a level-``l`` pixel
+    is ``2^l`` input pixels)."""
+    start = math.log2(ANTIALIAS_SHRINK)
+    logarithm = np.log2(np.maximum(shrink, 1.0))
+    ramp = np.clip((logarithm - start) / (1.0 - start), 0.0, 1.0)
+    return np.where(logarithm >= 1.0, logarithm, ramp)
 
 
 def _blend(into: np.ndarray, other: np.ndarray, weight: np.ndarray) -> None:
