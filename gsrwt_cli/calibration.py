@@ -263,19 +263,7 @@ def _opencv_matrix(
     if rows is None or cols is None:
         raise CalibrationError(path, key, "expected an opencv-matrix with rows and cols")
     data = node.getNode("data")
-    count = data.size() if data.isSeq() else 1
-    if shape is not None and (rows, cols) != shape:
-        raise CalibrationError(
-            path, key, f"expected {shape[0]}x{shape[1]} numbers, got {rows:g}x{cols:g}"
-        )
-    if shape is None and not (min(rows, cols) <= 1 and max(rows, cols) <= 14):
-        raise CalibrationError(
-            path, key, f"expected one row or column of at most 14 numbers, got {rows:g}x{cols:g}"
-        )
-    if count != rows * cols:
-        raise CalibrationError(
-            path, key, f"its data holds {count} values, not rows x cols = {rows * cols:g}"
-        )
+    _check_shape(path, key, rows, cols, shape, data.size() if data.isSeq() else 1)
     try:
         matrix = node.mat()
     except (cv2.error, SystemError) as error:
@@ -293,6 +281,24 @@ def _opencv_matrix(
             f"{matrix.shape}"
         )
     return matrix if shape is not None else matrix.reshape(-1)
+
+
+def _check_shape(path: str | Path, key: str, rows: float, cols: float,
+                 shape: tuple[int, int] | None, count: int) -> None:
+    """A matrix's declared ``rows x cols``: ``shape`` if given, else one row or column of at
+    most 14 numbers (a distortion vector), holding ``count`` values."""
+    if shape is not None and (rows, cols) != shape:
+        raise CalibrationError(
+            path, key, f"expected {shape[0]}x{shape[1]} numbers, got {rows:g}x{cols:g}"
+        )
+    if shape is None and not (min(rows, cols) <= 1 and max(rows, cols) <= 14):
+        raise CalibrationError(
+            path, key, f"expected one row or column of at most 14 numbers, got {rows:g}x{cols:g}"
+        )
+    if count != rows * cols:
+        raise CalibrationError(
+            path, key, f"its data holds {count} values, not rows x cols = {rows * cols:g}"
+        )
 
 
 def _opencv_number(path: str | Path, key: str, node: cv2.FileNode) -> float | None:
@@ -388,18 +394,7 @@ def _ros_matrix(
     if not isinstance(data, list):
         raise CalibrationError(path, f"{key}.data", f"expected a list of numbers, got "
                                f"{_kind(data)}")
-    if shape is not None and (rows, cols) != shape:
-        raise CalibrationError(
-            path, key, f"expected {shape[0]}x{shape[1]} numbers, got {rows:g}x{cols:g}"
-        )
-    if shape is None and not (min(rows, cols) <= 1 and max(rows, cols) <= 14):
-        raise CalibrationError(
-            path, key, f"expected one row or column of at most 14 numbers, got {rows:g}x{cols:g}"
-        )
-    if len(data) != rows * cols:
-        raise CalibrationError(
-            path, key, f"its data holds {len(data)} values, not rows x cols = {rows * cols:g}"
-        )
+    _check_shape(path, key, rows, cols, shape, len(data))
     numbers_ = [_ros_number(path, f"{key}.data", item) for item in data]
     matrix = np.array(numbers_, dtype=np.float64)
     return matrix.reshape(shape) if shape is not None else matrix

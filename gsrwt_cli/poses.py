@@ -46,6 +46,8 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .messages import quote
+
 Matrix = NDArray[np.float64]
 Vector = NDArray[np.float64]
 
@@ -87,7 +89,7 @@ def _finite_number(name: str, value: float, what: str = "a number of degrees") -
     try:
         number = float(value)
     except (TypeError, ValueError) as exc:
-        raise PoseError(f"{name} must be {what}, got {value!r}") from exc
+        raise PoseError(f"{name} must be {what}, got {quote(value)}") from exc
     if not math.isfinite(number):
         raise PoseError(f"{name} must be finite, got {number!r}")
     return number
@@ -98,7 +100,7 @@ def _vector3(name: str, values: ArrayLike) -> Vector:
     try:
         vector = np.asarray(values, dtype=np.float64)
     except (TypeError, ValueError) as exc:
-        raise PoseError(f"{name} must be three numbers, got {values!r}") from exc
+        raise PoseError(f"{name} must be three numbers, got {quote(values)}") from exc
     if vector.size != 3 or vector.ndim > 2:
         raise PoseError(f"{name} must be three numbers, got shape {vector.shape}")
     vector = vector.reshape(3)
@@ -112,7 +114,7 @@ def _rotation(name: str, matrix: ArrayLike) -> Matrix:
     try:
         m = np.asarray(matrix, dtype=np.float64)
     except (TypeError, ValueError) as exc:
-        raise PoseError(f"{name} must be a 3x3 rotation matrix, got {matrix!r}") from exc
+        raise PoseError(f"{name} must be a 3x3 rotation matrix, got {quote(matrix)}") from exc
     if m.shape != (3, 3):
         raise PoseError(f"{name} must be a 3x3 rotation matrix, got shape {m.shape}")
     if not np.all(np.isfinite(m)):
