@@ -164,7 +164,7 @@ def _error_text(error: BaseException, describe: Describe | None = None) -> str:
 def focal_source(values: Mapping[str, Any], where: str) -> str | None:
     """Where a job's focal length comes from: ``option``, ``sidecar`` (a sidecar row or the
     YAML beside the image), ``camera`` (a calibration file), or None: nowhere yet (EXIF)."""
-    if any(values.get(name) not in (None, "") for name in ("focal", "fx", "fy")):
+    if any(values.get(name) not in (None, "") for name in ("focal", "fx", "fy", "focal_mm")):
         return "option" if where == "options" else "sidecar"
     if values.get("camera"):
         return "camera"
@@ -177,6 +177,10 @@ def _view(job: Job) -> tuple[View, str]:
         raise _JobError(job.error)
     assert job.values is not None
     values, source = dict(job.values), focal_source(job.values, job.where)
+    if values.get("focal_mm") not in (None, "") and values.get("width") in (None, ""):
+        size = image_file_size(job.source)  # millimetres become pixels with the image's size
+        if size is not None:
+            values["width"], values["height"] = size
     if source is None:
         found = _exif_focal(job.source)
         if found is None:

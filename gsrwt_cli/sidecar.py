@@ -59,7 +59,10 @@ RVEC_FIELDS = ("rvec_x", "rvec_y", "rvec_z")
 TVEC_FIELDS = ("tvec_x", "tvec_y", "tvec_z")
 QUATERNION_FIELDS = ("qw", "qx", "qy", "qz")
 POSE_FIELDS = RVEC_FIELDS + TVEC_FIELDS + QUATERNION_FIELDS
-NUMERIC_FIELDS = VIEW_FIELDS + LENS_FIELDS + POSE_FIELDS + GSRWT_FIELDS
+#: A focal length in millimetres, with the sensor's size: ``fx = focal_mm * width /
+#: sensor_width_mm`` (and ``fy`` from ``sensor_height_mm``, else square pixels).
+SENSOR_FIELDS = ("focal_mm", "sensor_width_mm", "sensor_height_mm")
+NUMERIC_FIELDS = VIEW_FIELDS + LENS_FIELDS + POSE_FIELDS + SENSOR_FIELDS + GSRWT_FIELDS
 #: Fields whose values are words, not numbers: ``camera`` names a calibration file (OpenCV
 #: or ROS, relative to the sidecar) whose intrinsics the record's own fields override.
 TEXT_FIELDS = ("distortion_model", "camera")
@@ -185,6 +188,8 @@ def view_from_values(values: Mapping[str, Any], where: str) -> View:
     for name in ("pan", "tilt"):
         if name not in numbers_given:
             raise RecordError(where, None, f"missing field '{name}'")
+    _focal_from_millimetres(where, numbers_given)
+    given = set(numbers_given)
     camera = values.get("camera")
     if "focal" not in numbers_given and not {"fx", "fy"} <= given and not camera:
         raise RecordError(where, None, "missing field 'focal'")
@@ -211,6 +216,30 @@ def view_from_values(values: Mapping[str, Any], where: str) -> View:
                 f"gamma = {implied:.2f}",
             )
     return view
+
+
+def _focal_from_millimetres(where: str, numbers: dict[str, float]) -> None:
+    """Fill fx and fy from ``focal_mm`` and the sensor's size in millimetres, in place."""
+    if "focal_mm" not in numbers:
+        return
+    if given := {"focal", "fx", "fy"} & set(numbers):
+        raise RecordError(where, "focal_mm", f"give focal_mm or {sorted(given)[0]}, not both")
+    for name in ("sensor_width_mm", "width"):
+        if name not in numbers:
+            reason = (f"missing field '{name}' (needed with focal_mm"
+                      + (", or an image whose size can be read)" if name == "width" else ")"))
+            raise RecordError(where, name, reason)
+    for name in ("focal_mm", "sensor_width_mm", "sensor_height_mm"):
+        if name in numbers and not numbers[name] > 0:
+            raise RecordError(where, name, f"{name} must be positive, got {numbers[name]:g}")
+    numbers["fx"] = numbers["focal_mm"] * numbers["width"] / numbers["sensor_width_mm"]
+    if "sensor_height_mm" in numbers:
+        if "height" not in numbers:
+            raise RecordError(where, "height", "missing field 'height' (needed with "
+                              "sensor_height_mm)")
+        numbers["fy"] = numbers["focal_mm"] * numbers["height"] / numbers["sensor_height_mm"]
+    else:
+        numbers["fy"] = numbers["fx"]
 
 
 def _pose_from_rotation_fields(where: str, numbers: dict[str, float]) -> None:

@@ -375,3 +375,33 @@ def test_antialiasing_changes_nothing_where_nothing_shrinks():
     plain, _ = rectify_image(image, view, antialias=False)
     filtered, _ = rectify_image(image, view, antialias=True)
     np.testing.assert_array_equal(plain, filtered)
+
+
+def test_focal_length_in_millimetres_with_the_sensor_size(tmp_path):
+    """focal_mm and sensor_width_mm (sensor_height_mm for fy) become pixels with the image's
+    own size, read from the file when the row does not give it."""
+    cv2.imwrite(str(tmp_path / "a.png"), smooth_texture(300, 400, 3))
+    (tmp_path / "views.csv").write_text(
+        "image,pan,tilt,focal_mm,sensor_width_mm,sensor_height_mm\na.png,10,5,4.73,6.17,\n")
+    result = run_gsrwt("rectify", str(tmp_path / "a.png"), "--sidecar",
+                       str(tmp_path / "views.csv"), "-o", str(tmp_path / "out"))
+    assert result.returncode == 0, result.stderr
+    import csv
+
+    with open(tmp_path / "out" / "gsrwt.csv", encoding="utf-8") as table:
+        (row,) = csv.DictReader(table)
+    assert float(row["fx_px"]) == pytest.approx(4.73 * 400 / 6.17, abs=1e-5)
+    assert float(row["fy_px"]) == pytest.approx(4.73 * 400 / 6.17, abs=1e-5)
+    assert row["focal_source"] == "sidecar"
+    both = run_gsrwt("params", "--pan", "1", "--tilt", "2", "--width", "400", "--height", "300",
+                     "--sidecar", str(tmp_path / "views.csv"), "--format", "json")
+    import json
+
+    (params,) = json.loads(both.stdout)
+    assert params["fy_px"] == pytest.approx(params["fx_px"])
+    (tmp_path / "rect.csv").write_text(
+        "image,pan,tilt,focal_mm,sensor_width_mm,sensor_height_mm,width,height\n"
+        "a.png,10,5,4.73,6.17,4.63,400,300\n")
+    skewed = run_gsrwt("params", "--sidecar", str(tmp_path / "rect.csv"), "--format", "json")
+    (params,) = json.loads(skewed.stdout)
+    assert params["fy_px"] == pytest.approx(4.73 * 300 / 4.63)
