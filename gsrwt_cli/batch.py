@@ -47,6 +47,7 @@ RECTIFY_COLUMNS = (
     "output",
     "out_width",
     "out_height",
+    "scale",
     "homography",
     "status",
     "error",
@@ -83,6 +84,7 @@ class Settings:
     px_per_unit: float | None = None
     max_stretch: float = 4.0
     max_pixels: float = 50e6
+    max_size: tuple[int, int] | None = None
     interpolation: str = "linear"
     fill: float = 0.0
     alpha: bool = False
@@ -213,6 +215,7 @@ def _geometry(info: RectifyInfo) -> dict[str, Any]:
     return {
         **params_row(info.view, None),
         **info.pixel_map.table_columns(),
+        "scale": info.frame.scale,
     }
 
 
@@ -220,7 +223,7 @@ def _plan(view: View, width: int, height: int, settings: Settings) -> RectifyInf
     return plan_image(
         view, width, height, bbox=settings.bbox, scale=settings.scale,
         px_per_unit=settings.px_per_unit, max_stretch=settings.max_stretch,
-        max_pixels=settings.max_pixels,
+        max_pixels=settings.max_pixels, max_size=settings.max_size,
     )
 
 

@@ -114,6 +114,19 @@ def _whole_pixels(length: float) -> int:
     return max(0, round(length))
 
 
+def fit_frame(frame: Frame, max_size: tuple[int, int]) -> Frame:
+    """``frame`` with its scale lowered (never raised) so that its size fits ``max_size``."""
+    span_x, span_y = frame.x1 - frame.x0, frame.y1 - frame.y0
+    fits = min(max_size[0] / span_x, max_size[1] / span_y) if span_x > 0 and span_y > 0 else 0
+    if not math.isfinite(fits) or frame.scale <= fits:
+        return frame
+    scale = fits
+    while _whole_pixels(scale * span_x) > max_size[0] or _whole_pixels(scale * span_y) > (
+            max_size[1]):
+        scale = math.nextafter(scale, 0)  # rounding to whole pixels must not overshoot
+    return Frame(frame.x0, frame.y0, frame.x1, frame.y1, scale)
+
+
 def default_frame(view: View, scale: float = 1.0) -> Frame:
     """The thesis's bounding box (Fig. 5.7): the input's size at frontal resolution."""
     return Frame(0.0, 0.0, float(view.width), float(view.height), scale)
@@ -197,17 +210,20 @@ def plan_output(
     scale: float = 1.0,
     max_stretch: float = 4.0,
     max_pixels: float = 50e6,
+    max_size: tuple[int, int] | None = None,
 ) -> Plan:
     """Choose the output frame (spec section 5) and compose the one pixel map.
 
     ``bbox``: ``"frontal"`` (default frame), ``"full"`` (:func:`full_frame`) or an explicit
-    ``(x0, y0, x1, y1)`` in default-frame pixel edges. Raises ``ValueError`` for an empty
-    output, :class:`OutputTooLargeError` for one larger than ``max_pixels``.
+    ``(x0, y0, x1, y1)`` in default-frame pixel edges. ``max_size``: ``(width, height)`` the
+    output must fit in; a larger frame is kept but its ``scale`` lowered until it fits.
+    Raises ``ValueError`` for an empty output, :class:`OutputTooLargeError` for one larger
+    than ``max_pixels``.
     """
     if view.width is None or view.height is None:
         raise ValueError("the image size is needed to frame the output")
     with np.errstate(all="ignore"):  # non-finite results are checked below, not warned about
-        plan = _plan_output(view, bbox, scale, max_stretch, max_pixels)
+        plan = _plan_output(view, bbox, scale, max_stretch, max_pixels, max_size)
     if not np.all(np.isfinite(plan.homography)):
         raise ValueError(
             "the transform is not finite for this view (pan or tilt too close to 90 degrees?)"
@@ -221,6 +237,7 @@ def _plan_output(
     scale: float,
     max_stretch: float,
     max_pixels: float,
+    max_size: tuple[int, int] | None = None,
 ) -> Plan:
     if bbox == "frontal":
         frame = default_frame(view, scale)
@@ -228,6 +245,8 @@ def _plan_output(
         frame = full_frame(view, max_stretch, scale)
     else:
         frame = Frame(*(float(v) for v in bbox), scale=scale)
+    if max_size is not None:
+        frame = fit_frame(frame, max_size)
     width, height = frame.size
     if width < 1 or height < 1:
         raise ValueError(f"the output would be empty ({width}x{height} pixels)")

@@ -57,11 +57,13 @@ def plan_image(
     px_per_unit: float | None = None,
     max_stretch: float = 4.0,
     max_pixels: float = 50e6,
+    max_size: tuple[int, int] | None = None,
 ) -> RectifyInfo:
     """The geometry of rectifying a ``width x height`` image taken with ``view`` (no pixels)."""
     sized = view_for_image(view, width, height)
     return plan_output(
-        sized, bbox, resolve_scale(sized, scale, px_per_unit), max_stretch, max_pixels
+        sized, bbox, resolve_scale(sized, scale, px_per_unit), max_stretch, max_pixels,
+        max_size,
     )
 
 

@@ -405,3 +405,25 @@ def test_focal_length_in_millimetres_with_the_sensor_size(tmp_path):
     skewed = run_gsrwt("params", "--sidecar", str(tmp_path / "rect.csv"), "--format", "json")
     (params,) = json.loads(skewed.stdout)
     assert params["fy_px"] == pytest.approx(4.73 * 300 / 4.63)
+
+
+def test_max_size_lowers_the_scale_and_records_it(tmp_path):
+    import csv
+
+    image = camera_of(CASES["roll+25"]).render()
+    cv2.imwrite(str(tmp_path / "v.png"), image)
+    common = ["rectify", str(tmp_path / "v.png"), "--pan", "20", "--tilt", "15", "--roll", "25",
+              "--focal", "260", "--bbox", "full", "--table", "-"]
+    fitted = run_gsrwt(*common, "--max-size", "400x300", "-o", str(tmp_path / "fit"))
+    assert fitted.returncode == 0, fitted.stderr
+    (row,) = csv.DictReader(fitted.stdout.splitlines())
+    width, height, scale = int(row["out_width"]), int(row["out_height"]), float(row["scale"])
+    assert width <= 400 and height <= 300 and (width >= 399 or height >= 299)
+    assert scale < 1
+    again = run_gsrwt(*common, "--scale", repr(scale), "-o", str(tmp_path / "scaled"))
+    assert again.returncode == 0, again.stderr
+    fit, scaled = (cv2.imread(str(tmp_path / name / "v.png")) for name in ("fit", "scaled"))
+    assert fit.shape == scaled.shape  # the recorded scale (6 decimals) makes the same view
+    assert psnr(fit, scaled, np.ones(fit.shape[:2], bool)) > 40
+    bad = run_gsrwt(*common, "--max-size", "400by300", "-o", str(tmp_path / "bad"))
+    assert bad.returncode == 2 and "--max-size" in bad.stderr

@@ -76,6 +76,19 @@ def parse_pixel_count(text: str, option: str) -> float:
     return value
 
 
+def parse_size(text: str) -> tuple[int, int]:
+    """``1920x1080``: a width and height of whole positive pixels."""
+    parts = text.lower().split("x")
+    try:
+        width, height = (int(part) for part in parts)
+    except ValueError:
+        width = height = 0
+    if len(parts) != 2 or width < 1 or height < 1 or max(width, height) > 1 << 30:
+        raise click.BadParameter(f"expected WIDTHxHEIGHT in pixels such as 1920x1080, got "
+                                 f"{quote(text)}", param_hint="'--max-size'")
+    return width, height
+
+
 def positive(name: str, value: float | None) -> None:
     if value is not None and not (math.isfinite(value) and value > 0):
         raise click.BadParameter(f"must be a positive number, got {value:g}",
@@ -266,6 +279,9 @@ def open_table(path: str) -> Iterator[IO[str]]:
               help="Metric output: pixels per unit of the image's 'distance'.")
 @click.option("--max-pixels", default="50M", show_default=True,
               help="Refuse an output image larger than this (e.g. 50M, 2e7).")
+@click.option("--max-size", default=None, metavar="WxH",
+              help="Lower the scale so that the output fits in WxH pixels (the table's "
+                   "'scale' says what was used), instead of a larger output.")
 @click.option("--max-input-pixels", default="300M", show_default=True,
               help="Refuse, before decoding it, an input whose header claims more pixels.")
 @click.option("--interpolation", type=click.Choice(tuple(INTERPOLATIONS)), default="linear",
@@ -294,7 +310,7 @@ def rectify(
     max_stretch: float, scale: float | None, px_per_unit: float | None, max_pixels: str,
     interpolation: str, fill: float, alpha: bool, ext: str | None, quality: int,
     table_path: str | None, jobs: int | None, overwrite: bool, dry_run: bool, quiet: bool,
-    max_input_pixels: str, antialias: bool, **view_kwargs: Any,
+    max_input_pixels: str, antialias: bool, max_size: str | None, **view_kwargs: Any,
 ) -> None:
     """Rectify images into canonical frontal views of the wall they show (GS-RWT).
 
@@ -320,6 +336,7 @@ def rectify(
         raise click.BadParameter(f"must be a finite number, got {fill}", param_hint="'--fill'")
     pixel_limit = parse_pixel_count(max_pixels, "--max-pixels")
     input_pixel_limit = parse_pixel_count(max_input_pixels, "--max-input-pixels")
+    size_limit = parse_size(max_size) if max_size is not None else None
     extension = None
     if ext is not None:
         extension = canonical_extension(ext)
@@ -373,7 +390,7 @@ def rectify(
         max_pixels=pixel_limit, interpolation=interpolation, fill=fill, alpha=alpha,
         quality=quality, overwrite=overwrite, dry_run=dry_run,
         max_input_pixels=input_pixel_limit, root=outdir, describe=describe_error,
-        antialias=antialias,
+        antialias=antialias, max_size=size_limit,
     )
     processes = jobs or os.cpu_count() or 1
     tqdm.monitor_interval = 0  # no monitor thread: workers may fork from this process
