@@ -162,6 +162,68 @@ def full_frame(
     return Frame(float(low[0]), float(low[1]), float(high[0]), float(high[1]), scale)
 
 
+def crop_frame(
+    view: View, max_stretch: float = 4.0, scale: float = 1.0, cells: int = 160
+) -> Frame:
+    """The largest axis-aligned rectangle of the visible wall with no fill in it (auto-crop).
+
+    Within :func:`full_frame`'s extent, a lattice of ``cells + 1`` points a side is mapped
+    back to the input: a point counts if it lands inside the image (through the lens, if
+    any), in front of the horizon and within ``max_stretch``. A cell counts if its four
+    corners do (for a convex visible region the cell is then inside it). The largest
+    rectangle of counted cells is found for every pair of top and bottom rows at once:
+    columns valid over the rows by prefix sums, the longest run of them by a running
+    maximum, all in numpy.
+    """
+    full = full_frame(view, max_stretch, 1.0)
+    xs = np.linspace(full.x0, full.x1, cells + 1)
+    ys = np.linspace(full.y0, full.y1, cells + 1)
+    lattice = np.stack(np.meshgrid(xs, ys), axis=-1).reshape(-1, 2)
+    homography = output_from_input(view)
+    input_from_output = np.linalg.inv(homography)
+    centres = lattice - 0.5  # pixel edges to the default frame's pixel centres
+    ideal = map_points(input_from_output, centres)
+    w = centres @ input_from_output[2, :2] + input_from_output[2, 2]
+    lens = lens_distortion(view)
+    sources = ideal if lens is None else lens.distort(ideal)
+    with np.errstate(invalid="ignore"):
+        good = (w > 0) & np.all(np.isfinite(sources), axis=1)
+        # Between the outer pixel centres, where interpolation needs no pixel outside.
+        good &= (sources[:, 0] >= 0) & (sources[:, 0] <= view.width - 1)
+        good &= (sources[:, 1] >= 0) & (sources[:, 1] <= view.height - 1)
+        reference = local_stretch(homography, np.array([[view.cx, view.cy]]))[0]
+        good &= local_stretch(homography, np.nan_to_num(ideal)) <= max_stretch * reference
+    corners = good.reshape(cells + 1, cells + 1)
+    valid = corners[:-1, :-1] & corners[1:, :-1] & corners[:-1, 1:] & corners[1:, 1:]
+    top, bottom, left, right = _largest_rectangle(valid)
+    if bottom <= top:
+        raise NothingWithinStretchError(max_stretch)
+    cell_x, cell_y = (full.x1 - full.x0) / cells, (full.y1 - full.y0) / cells
+    return Frame(full.x0 + left * cell_x, full.y0 + top * cell_y, full.x0 + right * cell_x,
+                 full.y0 + bottom * cell_y, scale)
+
+
+def _largest_rectangle(valid: np.ndarray) -> tuple[int, int, int, int]:
+    """``(top, bottom, left, right)`` (ends exclusive) of the largest all-True rectangle of a
+    boolean grid; all zeros if there is none."""
+    rows, cols = valid.shape
+    prefix = np.concatenate([np.zeros((1, cols), int), np.cumsum(valid, axis=0)])
+    best, where = 0, (0, 0, 0, 0)
+    index = np.arange(cols)
+    for height in range(1, rows + 1):  # one vectorized pass per rectangle height
+        tops = np.arange(rows - height + 1)
+        full_columns = (prefix[tops + height] - prefix[tops]) == height  # (tops, cols)
+        last_gap = np.maximum.accumulate(np.where(full_columns, -1, index), axis=1)
+        runs = index - last_gap  # length of the run of full columns ending at each column
+        run = runs.max(axis=1)
+        row = int(np.argmax(run))
+        if run[row] * height > best:
+            end = int(np.argmax(runs[row])) + 1
+            best = int(run[row]) * height
+            where = (int(tops[row]), int(tops[row]) + height, end - int(run[row]), end)
+    return where
+
+
 class OutputTooLargeError(ValueError):
     """The output frame has more pixels than allowed: ``width x height`` above ``limit``."""
 
@@ -214,7 +276,8 @@ def plan_output(
 ) -> Plan:
     """Choose the output frame (spec section 5) and compose the one pixel map.
 
-    ``bbox``: ``"frontal"`` (default frame), ``"full"`` (:func:`full_frame`) or an explicit
+    ``bbox``: ``"frontal"`` (default frame), ``"full"`` (:func:`full_frame`), ``"crop"``
+    (:func:`crop_frame`) or an explicit
     ``(x0, y0, x1, y1)`` in default-frame pixel edges. ``max_size``: ``(width, height)`` the
     output must fit in; a larger frame is kept but its ``scale`` lowered until it fits.
     Raises ``ValueError`` for an empty output, :class:`OutputTooLargeError` for one larger
@@ -243,6 +306,8 @@ def _plan_output(
         frame = default_frame(view, scale)
     elif bbox == "full":
         frame = full_frame(view, max_stretch, scale)
+    elif bbox == "crop":
+        frame = crop_frame(view, max_stretch, scale)
     else:
         frame = Frame(*(float(v) for v in bbox), scale=scale)
     if max_size is not None:

@@ -427,3 +427,30 @@ def test_max_size_lowers_the_scale_and_records_it(tmp_path):
     assert psnr(fit, scaled, np.ones(fit.shape[:2], bool)) > 40
     bad = run_gsrwt(*common, "--max-size", "400by300", "-o", str(tmp_path / "bad"))
     assert bad.returncode == 2 and "--max-size" in bad.stderr
+
+
+@pytest.mark.parametrize("name", ["roll+25", "plumb_bob", "fisheye"])
+def test_bbox_crop_is_the_largest_rectangle_without_fill(tmp_path, name):
+    """--bbox crop with --alpha: not one transparent pixel, and most of what --bbox full
+    shows of the image is kept (the visible wall's largest inscribed rectangle)."""
+    import csv
+
+    case = CASES[name]
+    cv2.imwrite(str(tmp_path / "v.png"), camera_of(case).render())
+    row = sidecar_row("v.png", case)
+    (tmp_path / "views.csv").write_text(",".join(row) + "\n" + ",".join(map(str, row.values()))
+                                        + "\n")
+    areas = {}
+    for bbox in ("crop", "full"):
+        result = run_gsrwt("rectify", str(tmp_path / "v.png"), "--sidecar",
+                           str(tmp_path / "views.csv"), "--bbox", bbox, "--alpha", "--ext",
+                           "png", "-o", str(tmp_path / bbox), "--table", "-")
+        assert result.returncode == 0, result.stderr
+        (table_row,) = csv.DictReader(result.stdout.splitlines())
+        output = cv2.imread(str(tmp_path / bbox / "v.png"), cv2.IMREAD_UNCHANGED)
+        assert (output.shape[1], output.shape[0]) == (int(table_row["out_width"]),
+                                                      int(table_row["out_height"]))
+        areas[bbox] = int((output[..., 3] > 0).sum())
+        if bbox == "crop":
+            assert output[..., 3].min() == 255, "fill inside the crop"
+    assert areas["crop"] > 0.4 * areas["full"], areas  # a barrel border curves inward

@@ -43,8 +43,9 @@ from .options import InputError, view_defaults, view_options
 
 
 def parse_bbox(text: str) -> str | tuple[float, float, float, float]:
-    """``frontal``, ``full`` or ``X0,Y0,X1,Y1`` (default-frame pixels, X1 > X0, Y1 > Y0)."""
-    if text in ("frontal", "full"):
+    """``frontal``, ``full``, ``crop`` or ``X0,Y0,X1,Y1`` (default-frame pixels, X1 > X0,
+    Y1 > Y0)."""
+    if text in ("frontal", "full", "crop"):
         return text
     parts = text.split(",")
     try:
@@ -53,7 +54,7 @@ def parse_bbox(text: str) -> str | tuple[float, float, float, float]:
         box = ()
     if len(box) != 4 or not all(math.isfinite(v) for v in box):
         raise click.BadParameter(
-            f"expected frontal, full or X0,Y0,X1,Y1 (four numbers), got {quote(text)}",
+            f"expected frontal, full, crop or X0,Y0,X1,Y1 (four numbers), got {quote(text)}",
             param_hint="'--bbox'",
         )
     if box[2] <= box[0] or box[3] <= box[1]:
@@ -269,10 +270,11 @@ def open_table(path: str) -> Iterator[IO[str]]:
 @view_options
 @click.option("--bbox", default="frontal", show_default=True,
               help="Output extent: frontal (the thesis's box, the input's size), full (the "
-                   "visible wall, up to --max-stretch) or X0,Y0,X1,Y1 in default-frame pixels.")
+                   "visible wall, up to --max-stretch), crop (the largest rectangle of it with "
+                   "no fill) or X0,Y0,X1,Y1 in default-frame pixels.")
 @click.option("--max-stretch", type=float, default=4.0, show_default=True,
-              help="With --bbox full: stop where the image is magnified more than this many "
-                   "times the magnification at its centre.")
+              help="With --bbox full or crop: stop where the image is magnified more than "
+                   "this many times the magnification at its centre.")
 @click.option("--scale", type=float, default=None,
               help="Output pixels per frontal pixel [default: 1].")
 @click.option("--px-per-unit", type=float, default=None,
