@@ -464,7 +464,7 @@ def test_gsrwt_parameters_in_a_row_give_the_same_output(tmp_path):
         (["nowhere", "-o", "OUT", "--pan", "1", "--tilt", "1", "--focal", "9"],
          "nowhere: no such file or directory"),
         (["IN", "-o", "OUT", "--bogus"], "No such option '--bogus'"),
-        (["IN", "-o", "OUT", "--bbox", "1,2,3"], "expected frontal, full or X0,Y0,X1,Y1"),
+        (["IN", "-o", "OUT", "--bbox", "1,2,3"], "expected frontal, full, crop or X0,Y0,X1,Y1"),
         (["IN", "-o", "OUT", "--scale", "-2"], "must be a positive number"),
         (["IN", "-o", "OUT", "--ext", "gif"], "cannot write '.gif' files"),
         (["IN", "-o", "OUT", "--table", "t.xlsx"], "must end in .csv, .tsv, .json or .jsonl"),
