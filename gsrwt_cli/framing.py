@@ -354,8 +354,10 @@ def texture_from_camera(view: View, texture_size: tuple[int, int]) -> Matrix:
 
 def render_map(view: View, texture_size: tuple[int, int]) -> PixelMap:
     """The pixel map of ``gsrwt render``: camera pixels (the output, of the view's size) from
-    texture pixels (the input), the inverse of :func:`texture_from_camera`."""
+    texture pixels (the input), the inverse of :func:`texture_from_camera`, through the
+    camera's lens if it has one (on the output side: the camera's pixels are distorted)."""
     if view.width is None or view.height is None:
         raise ValueError("the view needs an image size (width and height) to render")
     camera_from_texture = np.linalg.inv(texture_from_camera(view, texture_size))
-    return PixelMap(camera_from_texture, (view.width, view.height))
+    return PixelMap(camera_from_texture, (view.width, view.height),
+                    output_lens=lens_distortion(view))

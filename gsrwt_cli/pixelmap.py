@@ -151,20 +151,40 @@ class PixelMap:
     output_from_input: Matrix
     size: tuple[int, int]
     lens: LensDistortion | None = None  # input pixels are ideal ones distorted by this
+    output_lens: LensDistortion | None = None  # output pixels are, instead (gsrwt render)
 
     def to_output(self, points: np.ndarray) -> np.ndarray:
         """``(N, 2)`` input pixels to output pixels."""
         if self.lens is not None:
             points = self.lens.undistort(points)
-        return map_points(self.output_from_input, points)
+        output = map_points(self.output_from_input, points)
+        return output if self.output_lens is None else self.output_lens.distort(output)
 
     def to_input(self, points: np.ndarray) -> np.ndarray:
         """``(N, 2)`` output pixels to input pixels."""
+        if self.output_lens is not None:
+            points = self.output_lens.undistort(np.asarray(points, dtype=np.float64))
         ideal = map_points(np.linalg.inv(self.output_from_input), points)
         return ideal if self.lens is None else self.lens.distort(ideal)
 
+    def _output_lens_maps(self) -> tuple[np.ndarray, np.ndarray]:
+        """Float maps through a lens on the output side: every output pixel undistorted, then
+        back through the homography; beyond the horizon (``w <= 0``) nothing is sampled."""
+        width, height = self.size
+        cols, rows = np.meshgrid(np.arange(width, dtype=np.float64),
+                                 np.arange(height, dtype=np.float64))
+        ideal = self.output_lens.undistort(np.column_stack([cols.ravel(), rows.ravel()]))
+        inverse = np.linalg.inv(self.output_from_input)
+        sources = map_points(inverse, ideal)
+        w = ideal @ inverse[2, :2] + inverse[2, 2]
+        sources[~(w > 0) | ~np.all(np.isfinite(sources), axis=1)] = -1e6
+        return (sources[:, 0].reshape(height, width).astype(np.float32),
+                sources[:, 1].reshape(height, width).astype(np.float32))
+
     def then(self, output_from_output: Matrix, size: tuple[int, int]) -> PixelMap:
         """This map followed by a homography of the output (a new frame of ``size``)."""
+        if self.output_lens is not None:
+            raise ValueError("a map with a lens on its output side has no other frame")
         return PixelMap(np.asarray(output_from_output) @ self.output_from_input, size, self.lens)
 
     def beyond_horizon(self) -> np.ndarray | None:
@@ -229,6 +249,10 @@ class PixelMap:
         without a per-pixel loop); nothing changes, and nothing is spent, where no part of
         the output shrinks that much.
         """
+        if self.output_lens is not None:
+            map_x, map_y = self._output_lens_maps()
+            return cv2.remap(pixels, map_x, map_y, interpolation, dst=out,
+                             borderMode=cv2.BORDER_CONSTANT, borderValue=fill)
         warped = self._resample(pixels, 0, interpolation, fill, out)
         if antialias:
             self._antialias(pixels, warped, interpolation, fill)

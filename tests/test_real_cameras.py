@@ -454,3 +454,25 @@ def test_bbox_crop_is_the_largest_rectangle_without_fill(tmp_path, name):
         if bbox == "crop":
             assert output[..., 3].min() == 255, "fill inside the crop"
     assert areas["crop"] > 0.4 * areas["full"], areas  # a barrel border curves inward
+
+
+def test_render_through_a_lens_and_rectify_it_back():
+    """gsrwt render of a distorted camera, rectified through the same lens, gives the same
+    frontal view as a pinhole camera's render rectified: the lens is undone exactly once."""
+    from gsrwt_cli.rectify import rectify_image
+    from gsrwt_cli.render import render_view
+
+    lens = Lens("plumb_bob", (("k1", -0.25), ("k2", 0.05), ("p1", 0.001)))
+    common = dict(roll=10, fx=250, fy=240, cx=CX, cy=CY, width=WIDTH, height=HEIGHT)
+    pinhole = View(20, 15, **common)
+    distorted = View(20, 15, lens=lens, **common)
+    texture = smooth_texture(500, 700, 8)
+    pinhole_view = render_view(texture, pinhole)
+    distorted_view = render_view(texture, distorted)
+    assert psnr(pinhole_view, distorted_view, np.ones((HEIGHT, WIDTH), bool)) < 20
+    back_pinhole, _ = rectify_image(pinhole_view, pinhole, antialias=False, alpha=True)
+    back_distorted, _ = rectify_image(distorted_view, distorted, antialias=False, alpha=True)
+    seen = (back_pinhole[..., 3] == 255) & (back_distorted[..., 3] == 255)
+    seen = cv2.erode(seen.astype(np.uint8), np.ones((5, 5), np.uint8)).astype(bool)
+    assert seen.mean() > 0.4
+    assert psnr(back_pinhole[..., :3], back_distorted[..., :3], seen) >= 35
