@@ -476,3 +476,22 @@ def test_render_through_a_lens_and_rectify_it_back():
     seen = cv2.erode(seen.astype(np.uint8), np.ones((5, 5), np.uint8)).astype(bool)
     assert seen.mean() > 0.4
     assert psnr(back_pinhole[..., :3], back_distorted[..., :3], seen) >= 35
+
+
+@pytest.mark.parametrize("model, coefficients, focal", [
+    ("plumb_bob", (("k1", -0.3), ("k2", 0.08), ("p1", 0.001)), 2400),
+    ("rational_polynomial", (("k1", 0.2), ("k2", -0.1), ("k4", 0.45)), 2400),
+    ("equidistant", (("k1", 0.05), ("k2", -0.01)), 1200),
+])
+def test_big_frames_lens_maps_interpolated_from_a_grid_err_under_a_hundredth_pixel(
+        model, coefficients, focal):
+    from gsrwt_cli.framing import lens_distortion
+    from gsrwt_cli.rectify import plan_image
+
+    plan = plan_image(View(20, 15, focal, roll=7, lens=Lens(model, coefficients)), 2000, 1500)
+    lens = lens_distortion(plan.view)
+    grid_x, grid_y = lens.maps(plan.homography, plan.size)
+    exact_x, exact_y = lens.maps(plan.homography, plan.size, step=1)  # every pixel by OpenCV
+    inside = (exact_x > 0) & (exact_x < 1999) & (exact_y > 0) & (exact_y < 1499)
+    assert inside.mean() > 0.5
+    assert np.hypot(grid_x - exact_x, grid_y - exact_y)[inside].max() < 0.01
