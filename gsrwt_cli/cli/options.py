@@ -120,7 +120,7 @@ def view_options(func: F) -> F:
     return click.option(
         "--camera", type=click.Path(dir_okay=False),
         help="Calibration file (OpenCV YAML/XML or ROS camera_info) with the intrinsics and "
-             "lens; the options and sidecar fields above override it.")(func)
+             "lens; the view options and sidecar fields override it.")(func)
 
 
 def interpolation_option(func: F) -> F:
