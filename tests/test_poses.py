@@ -166,7 +166,10 @@ def test_any_rotation_decomposes_exactly_when_the_wall_is_in_front(qw, qx, qy, q
     if w[2, 2] > 1e-9:
         pan, tilt, roll = pose_from_rotation(w)
         assert abs(pan) < 90 and abs(tilt) < 90 and abs(roll) <= 180
-        np.testing.assert_allclose(rotation_from_pose(pan, tilt, roll), w, atol=1e-12)
+        # Near edge-on (W[2,2] -> 0) the angles are ill-conditioned: atan2 of two numbers of
+        # size W[2,2] loses about eps / W[2,2] of the rebuilt matrix, and no more.
+        tolerance = 1e-12 + 1e-15 / w[2, 2]
+        np.testing.assert_allclose(rotation_from_pose(pan, tilt, roll), w, atol=tolerance)
     elif w[2, 2] <= 0:
         with pytest.raises(PoseError, match="not in front"):
             pose_from_rotation(w)
