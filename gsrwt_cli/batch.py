@@ -4,6 +4,9 @@ Each image becomes a :class:`Job` in the main process (cheap: paths and paramete
 and a table row in a worker (read, warp, write atomically). Only one image per worker is in
 memory at a time; rows come back in input order. Every image gets a row that tells the truth,
 whatever happens to it or to its worker.
+
+Over 400 lines: the truthful row of every kind of job (done, skipped, failed, interrupted,
+its worker dead) is the module's one job.
 """
 
 from __future__ import annotations
@@ -36,9 +39,10 @@ from .imaging import (
 from .messages import one_line
 from .outputs import OutsideOutputError, check_inside, remove_stale_temporaries, write_atomic
 from .parameters import Found, NotFound, Problem, resolve_parameters
+from .records import RecordError, view_from_values
 from .rectify import RectifyInfo, plan_image
 from .report import PARAMS_COLUMNS, params_row
-from .sidecar import RecordError, Sidecar, view_from_values
+from .sidecar import Sidecar
 from .sources import Source
 
 RECTIFY_COLUMNS = (

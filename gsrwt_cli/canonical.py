@@ -17,8 +17,9 @@ import numpy as np
 from .imaging import ImageError, read_image
 from .parameters import NotFound, Problem, resolve_parameters
 from .pixelmap import PixelMap
+from .records import RecordError
 from .rectify import rectify_image
-from .sidecar import RecordError, Sidecar
+from .sidecar import Sidecar
 
 
 @dataclass(frozen=True)

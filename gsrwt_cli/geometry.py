@@ -11,6 +11,9 @@ Convention (thesis Sec. 3.2, spec section 1)
 - Pan ``alpha > 0`` turns the camera to the left, tilt ``beta > 0`` tilts it up.
 - A 3x3 matrix ``r`` maps ``[u, v, 1] ~ r @ [x, y, 1]`` (Eq. 4.5); names say which frames
   a matrix maps between.
+
+Over 400 lines: every transform and parameter of the thesis's Ch. 2 and 4, written out as
+the thesis gives them.
 """
 
 from __future__ import annotations

@@ -22,17 +22,15 @@ from pathlib import Path, PurePosixPath
 from typing import Any
 
 from .camera import View
+from .records import NUMERIC_FIELDS, merge_values, view_from_values
 from .sidecar import (
-    NUMERIC_FIELDS,
     Record,
     Sidecar,
     SidecarError,
     display_path,
     fields_of,
     load_yaml_file,
-    merge_values,
     sidecar_from_yaml,
-    view_from_values,
 )
 
 #: The options that alone make a view: the pose; the focal length may come from --focal,

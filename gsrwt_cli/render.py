@@ -26,7 +26,8 @@ from .outputs import (
     remove_stale_temporaries,
     write_atomic,
 )
-from .sidecar import Record, RecordError, format_sidecar, view_from_values
+from .records import RecordError, view_from_values
+from .sidecar import Record, format_sidecar
 from .targets import (
     DirectoryTargetError,
     NotADirectoryTargetError,

@@ -21,7 +21,8 @@ from gsrwt_cli.parameters import (
     adjacent_yaml,
     resolve_parameters,
 )
-from gsrwt_cli.sidecar import RecordError, load_sidecar
+from gsrwt_cli.records import RecordError
+from gsrwt_cli.sidecar import load_sidecar
 from gsrwt_cli.sources import Source
 
 OPTIONS = {"pan": 5.0, "tilt": 6.0, "focal": 280.0}

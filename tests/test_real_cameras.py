@@ -319,7 +319,7 @@ def test_sidecar_poses_from_solvepnp_and_quaternions(tmp_path):
 
 
 def test_the_distance_of_a_tvec_is_along_the_walls_normal():
-    from gsrwt_cli.sidecar import view_from_values
+    from gsrwt_cli.records import view_from_values
 
     # A camera turned left by 30 degrees, 2 units from the wall: tvec_z is 2 / cos 30.
     view = view_from_values({"rvec_x": 0, "rvec_y": math.pi / 6, "rvec_z": 0, "tvec_x": 0,

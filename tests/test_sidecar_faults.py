@@ -33,9 +33,10 @@ from gsrwt_cli.camera import (
     ViewError,
 )
 from gsrwt_cli.framing import output_from_input
+from gsrwt_cli.records import RecordError, view_from_values
 from gsrwt_cli.report import params_row
 from gsrwt_cli.safe_yaml import MAX_DEPTH, YamlInputError, load_yaml
-from gsrwt_cli.sidecar import RecordError, SidecarError, load_sidecar, view_from_values
+from gsrwt_cli.sidecar import SidecarError, load_sidecar
 
 #: Bound on one stderr line of ``gsrwt`` about a sidecar (the path is short in these tests).
 LINE_BOUND = 500

@@ -13,7 +13,7 @@ from ..camera import View
 from ..imaging import INTERPOLATIONS
 from ..landmarks import DEFAULT_EDGE_THRESHOLD
 from ..messages import one_line
-from ..sidecar import VIEW_FIELDS, RecordError, view_from_values
+from ..records import VIEW_FIELDS, RecordError, view_from_values
 from ..tables import FORMATS
 from ..targets import (
     DirectoryTargetError,
@@ -94,7 +94,7 @@ def resolve_format(fmt: str | None) -> str:
     return "table" if sys.stdout.isatty() else "csv"
 
 
-#: The view options: type and help of each of :data:`~gsrwt_cli.sidecar.VIEW_FIELDS`.
+#: The view options: type and help of each of :data:`~gsrwt_cli.camera.VIEW_FIELDS`.
 VIEW_OPTIONS: dict[str, tuple[type, str]] = {
     "pan": (float, "Pan in degrees, positive turns left."),
     "tilt": (float, "Tilt in degrees, positive tilts up."),
@@ -113,7 +113,7 @@ VIEW_OPTIONS: dict[str, tuple[type, str]] = {
 
 def view_options(func: F) -> F:
     """``--pan --tilt --roll --focal --fx --fy --cx --cy --skew --width --height --distance``:
-    one option for each field of :data:`~gsrwt_cli.sidecar.VIEW_FIELDS`, in its order."""
+    one option for each field of :data:`~gsrwt_cli.camera.VIEW_FIELDS`, in its order."""
     for name in reversed(VIEW_FIELDS):
         kind, text = VIEW_OPTIONS[name]
         func = click.option(f"--{name}", type=kind, help=text)(func)

@@ -8,8 +8,9 @@ from typing import Any
 
 import click
 
+from ..records import RecordError
 from ..report import PARAMS_COLUMNS, params_row
-from ..sidecar import RecordError, SidecarError, load_sidecar
+from ..sidecar import SidecarError, load_sidecar
 from ..tables import write_table
 from .options import (
     InputError,

@@ -1,4 +1,8 @@
-"""``gsrwt rectify``: canonical frontal views of whole directories, and a table of what was done."""
+"""``gsrwt rectify``: canonical frontal views of whole directories, and a table of what was done.
+
+Over 400 lines: the main command's options, its checks before any work, and the wording of
+the core's errors in terms of those options.
+"""
 
 from __future__ import annotations
 
@@ -35,8 +39,9 @@ from ..imaging import (
 )
 from ..messages import one_line, quote
 from ..outputs import open_atomic, remove_stale_temporaries
+from ..records import load_camera_file
 from ..rectify import MissingDistanceError
-from ..sidecar import SidecarError, load_camera_file, load_sidecar
+from ..sidecar import SidecarError, load_sidecar
 from ..sources import Source, source_from_listed_path, sources_from_directory
 from ..tables import TableWriter, format_from_extension, read_table
 from .options import InputError, view_defaults, view_options

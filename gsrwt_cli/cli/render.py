@@ -9,8 +9,9 @@ from typing import Any
 import click
 
 from ..imaging import ImageError, read_image
+from ..records import RecordError
 from ..render import plan_one_view, plan_views, render_views, write_views_sidecar
-from ..sidecar import RecordError, SidecarError, load_sidecar
+from ..sidecar import SidecarError, load_sidecar
 from ..targets import NotADirectoryTargetError, TargetError, UncreatableDirectoryError
 from .options import (
     InputError,
