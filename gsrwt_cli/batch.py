@@ -308,6 +308,14 @@ def died_row(job: Job, reason: str) -> dict[str, Any]:
     return row
 
 
+def dead_worker_row(job: Job, reason: str, settings: Settings) -> dict[str, Any]:
+    """The row of an image whose worker died: ``error``, unless the worker had written the
+    output (whole: writes are atomic) before it died, when the image was done after all."""
+    if not job.existed and not settings.dry_run and job.output.exists():
+        return record_row(job, settings, status="ok")
+    return died_row(job, reason)
+
+
 def interrupted_row(job: Job, settings: Settings) -> dict[str, Any]:
     """The row of an image the run did not finish: its record if its output exists."""
     if job.output.exists():
@@ -440,7 +448,8 @@ def run_batch(
         executor = ProcessExecutor(
             ImageWorker.in_own_process, (settings, 1 if processes > 1 else 0),
             max(1, min(processes, len(worker_jobs))),
-            on_death=died_row, on_abandon=_remove_temporaries_of,
+            on_death=lambda job, reason: dead_worker_row(job, reason, settings),
+            on_abandon=_remove_temporaries_of,
             context=context or worker_context(),
         )
     results = executor.map_unordered([jobs[index] for index in worker_jobs])
