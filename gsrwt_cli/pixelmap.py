@@ -99,11 +99,9 @@ class LensDistortion:
             coarse = initialize(k, self._d, rotation, np.eye(3), grid, cv2.CV_32FC1)
             if step == 1:
                 return coarse
-            return tuple(
-                np.ascontiguousarray(cv2.resize(part, None, fx=step, fy=step,
-                                                interpolation=cv2.INTER_LINEAR)
-                                     [step:step + height, step:step + width])
-                for part in coarse)
+            # Views into the resized grid (cv2.remap takes row-strided maps as they are).
+            return tuple(cv2.resize(part, None, fx=step, fy=step, interpolation=cv2.INTER_LINEAR)
+                         [step:step + height, step:step + width] for part in coarse)
         cols, rows = np.meshgrid(np.arange(width, dtype=np.float64),
                                  np.arange(height, dtype=np.float64))
         outputs = np.column_stack([cols.ravel(), rows.ravel()])
