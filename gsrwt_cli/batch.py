@@ -308,18 +308,25 @@ def died_row(job: Job, reason: str) -> dict[str, Any]:
     return row
 
 
+def _written_before_it_stopped(job: Job, settings: Settings) -> bool:
+    """Whether this run wrote the job's output (whole: writes are atomic) before its worker
+    died or the run was stopped, so that the image was done after all."""
+    return not job.existed and not settings.dry_run and job.output.exists()
+
+
 def dead_worker_row(job: Job, reason: str, settings: Settings) -> dict[str, Any]:
-    """The row of an image whose worker died: ``error``, unless the worker had written the
-    output (whole: writes are atomic) before it died, when the image was done after all."""
-    if not job.existed and not settings.dry_run and job.output.exists():
+    """The row of an image whose worker died: ``error``, unless it was done after all."""
+    if _written_before_it_stopped(job, settings):
         return record_row(job, settings, status="ok")
     return died_row(job, reason)
 
 
 def interrupted_row(job: Job, settings: Settings) -> dict[str, Any]:
     """The row of an image the run did not finish: its record if its output exists."""
+    if _written_before_it_stopped(job, settings):
+        return record_row(job, settings, status="ok")
     if job.output.exists():
-        return record_row(job, settings, status="ok" if not job.existed else "skipped")
+        return record_row(job, settings)
     row = died_row(job, "not done: the run was interrupted")
     row["status"] = "interrupted"
     return row
