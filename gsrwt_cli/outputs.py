@@ -118,6 +118,11 @@ def write_atomic(path: str | Path, data: bytes, *, root: str | Path | None = Non
         handle.write(data)
 
 
+def temporary_target(name: str) -> str:
+    """The file name a temporary of ours stands for: ``.a.jpg.gsrwt-12-x.part`` -> ``a.jpg``."""
+    return name[1:].rsplit(".gsrwt-", 1)[0]
+
+
 def _process_alive(pid: int) -> bool:
     if pid == os.getpid():
         return True
@@ -132,12 +137,16 @@ def _process_alive(pid: int) -> bool:
     return True
 
 
-def remove_stale_temporaries(directory: str | Path, pids: set[int] | None = None) -> list[Path]:
+def remove_stale_temporaries(
+    directory: str | Path, pids: set[int] | None = None, names: set[str] | None = None
+) -> list[Path]:
     """Remove our temporary files in ``directory`` whose writing process is gone.
 
     ``pids``: remove only those of these processes (known dead, e.g. a killed worker),
-    whether or not the id has been reused since. Returns what was removed; a directory that
-    does not exist or cannot be listed has nothing to remove.
+    whether or not the id has been reused since. ``names``: remove only temporaries of these
+    file names (the outputs of one shard, whose neighbours may be written by other machines,
+    where a live process's id means nothing here). Returns what was removed; a directory
+    that does not exist or cannot be listed has nothing to remove.
     """
     removed = []
     try:
@@ -149,6 +158,8 @@ def remove_stale_temporaries(directory: str | Path, pids: set[int] | None = None
         if match is None:
             continue
         pid = int(match.group(1))
+        if names is not None and temporary_target(entry.name) not in names:
+            continue
         stale = pid in pids if pids is not None else not _process_alive(pid)
         if stale and not entry.is_dir(follow_symlinks=False):
             with contextlib.suppress(FileNotFoundError):

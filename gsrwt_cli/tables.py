@@ -149,3 +149,119 @@ def read_table(stream: IO[str], fmt: str) -> list[dict[str, Any]]:
     if not isinstance(rows, list) or not all(isinstance(row, dict) for row in rows):
         raise ValueError("not a table of rows")
     return rows
+
+
+# --------------------------------------------------------------------------------------------
+# Shards: the tables of ``--shard K/N`` runs joined into one
+# --------------------------------------------------------------------------------------------
+
+#: ``gsrwt.3-of-8.csv``: the K and N of a shard's table name.
+SHARD_NAME = re.compile(r"\.(\d+)-of-(\d+)\.[A-Za-z]+$")
+
+
+def parse_shard(text: str) -> tuple[int, int]:
+    """``K/N`` (the K-th of N slices, 1 <= K <= N) as ``(K, N)``; ``ValueError`` otherwise."""
+    parts = text.split("/")
+    try:
+        k, n = (int(part) for part in parts)
+    except ValueError:
+        k = n = 0
+    if len(parts) != 2 or not 1 <= k <= n:
+        raise ValueError(f"expected K/N with 1 <= K <= N, such as 2/8, got {text!r}")
+    return k, n
+
+
+def shard_slice(count: int, k: int, n: int) -> range:
+    """The indices of the K-th of N contiguous slices of ``count`` items.
+
+    Slices differ in size by one at most, cover ``range(count)`` in order and never overlap,
+    so that shard 1's items, then shard 2's, ... are the items in input order.
+    """
+    return range((k - 1) * count // n, k * count // n)
+
+
+def shard_table_name(name: str, k: int, n: int) -> str:
+    """``gsrwt.csv`` -> ``gsrwt.2-of-8.csv``: the table of shard ``k`` of ``n``."""
+    stem, dot, extension = name.rpartition(".")
+    return f"{stem}.{k}-of-{n}.{extension}" if dot else f"{name}.{k}-of-{n}"
+
+
+def shard_of_name(name: str) -> tuple[int, int] | None:
+    """``(K, N)`` from a shard table's name (``gsrwt.2-of-8.csv``), or None."""
+    match = SHARD_NAME.search(name)
+    return (int(match.group(1)), int(match.group(2))) if match else None
+
+
+class MergeError(ValueError):
+    """Shard tables that do not make one table; the message names the table and the fault."""
+
+
+def order_shards(names: Sequence[str]) -> list[str]:
+    """Shard tables in shard order (by the ``K-of-N`` in their names), all N of them.
+
+    Tables whose names carry no ``K-of-N`` keep the order given (then none may carry one).
+    Raises :class:`MergeError` for a missing, repeated or mismatched shard.
+    """
+    shards = [shard_of_name(name) for name in names]
+    if all(shard is None for shard in shards):
+        return list(names)
+    if any(shard is None for shard in shards):
+        name = names[shards.index(None)]
+        raise MergeError(f"{name}: no K-of-N in its name, unlike the other tables")
+    totals = {n for _, n in shards}  # type: ignore[misc]
+    if len(totals) != 1:
+        raise MergeError("the tables come from different shardings: "
+                         + ", ".join(sorted(f"of {n}" for n in totals)))
+    (total,) = totals
+    by_k: dict[int, str] = {}
+    for name, (k, _) in zip(names, shards):  # type: ignore[misc]
+        if k in by_k:
+            raise MergeError(f"{name}: shard {k}-of-{total} is also {by_k[k]}")
+        by_k[k] = name
+    missing = [str(k) for k in range(1, total + 1) if k not in by_k]
+    if missing:
+        raise MergeError(f"shard {', '.join(missing)} of {total} missing "
+                         f"(got {len(by_k)} of {total} tables)")
+    return [by_k[k] for k in range(1, total + 1)]
+
+
+def header_columns(stream: IO[str], fmt: str) -> list[str] | None:
+    """The column names of a csv or tsv table (its first line), or None for JSON."""
+    if fmt not in ("csv", "tsv"):
+        return None
+    reader = csv.reader(stream, dialect="excel-tab" if fmt == "tsv" else "excel")
+    return next(reader, [])
+
+
+def merge_tables(
+    tables: Sequence[tuple[str, IO[str], str]], output: IO[str], fmt: str
+) -> int:
+    """Write the rows of ``tables`` (``(name, stream, format)`` each, in order) as one table.
+
+    Every table must have the columns of the first (in its order); the merged table has them
+    too. Returns the number of rows written; raises :class:`MergeError` naming the table.
+    """
+    columns: list[str] | None = None
+    parts: list[list[dict[str, Any]]] = []
+    for name, stream, table_format in tables:
+        try:
+            header = header_columns(stream, table_format)
+            if header is not None:
+                stream.seek(0)
+            rows = read_table(stream, table_format)
+        except (ValueError, csv.Error) as error:
+            raise MergeError(f"{name}: not a table gsrwt wrote ({error})") from None
+        own = header if header is not None else (list(rows[0]) if rows else None)
+        if own is not None:
+            if columns is None:
+                columns = own
+            elif own != columns:
+                raise MergeError(f"{name}: its columns differ from those of {tables[0][0]}")
+        parts.append(rows)
+    writer = TableWriter(output, columns or [], fmt)
+    count = 0
+    for rows in parts:
+        writer.write_rows(rows)
+        count += len(rows)
+    writer.close()
+    return count

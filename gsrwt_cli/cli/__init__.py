@@ -20,6 +20,7 @@ from .landmarks import lines, match
 from .params import params
 from .rectify import rectify
 from .render import render
+from .tables import tables
 
 #: Exit status of a command whose standard output was closed by its reader: 128 + SIGPIPE,
 #: what a shell reports for ``cat`` killed by SIGPIPE in ``cat big | head -1``.
@@ -135,6 +136,7 @@ main.add_command(gaze)
 main.add_command(track)
 main.add_command(lines)
 main.add_command(match)
+main.add_command(tables)
 
 
 def _end_for_closed_stdout() -> NoReturn:

@@ -43,7 +43,14 @@ from ..records import load_camera_file
 from ..rectify import MissingDistanceError
 from ..sidecar import SidecarError, load_sidecar
 from ..sources import Source, source_from_listed_path, sources_from_directory
-from ..tables import TableWriter, format_from_extension, read_table
+from ..tables import (
+    TableWriter,
+    format_from_extension,
+    parse_shard,
+    read_table,
+    shard_slice,
+    shard_table_name,
+)
 from .options import InputError, view_defaults, view_options
 
 
@@ -311,13 +318,18 @@ def open_table(path: str) -> Iterator[IO[str]]:
               help="Worker processes [default: all cores].")
 @click.option("--overwrite", is_flag=True, help="Replace existing outputs instead of skipping.")
 @click.option("--dry-run", is_flag=True, help="Check everything and write the table only.")
+@click.option("--shard", default=None, metavar="K/N",
+              help="Process only the K-th of N equal slices of the input list (Slurm array "
+                   "jobs, CI matrices); the table is OUTDIR/gsrwt.K-of-N.csv; join the "
+                   "tables with 'gsrwt tables merge'.")
 @click.option("-q", "--quiet", is_flag=True, help="No progress bar and no summary.")
 def rectify(
     inputs: tuple[str, ...], outdir: Path, recursive: bool, sidecar: Path | None, bbox: str,
     max_stretch: float, scale: float | None, px_per_unit: float | None, max_pixels: str,
     interpolation: str, fill: float, alpha: bool, ext: str | None, quality: int,
     table_path: str | None, jobs: int | None, overwrite: bool, dry_run: bool, quiet: bool,
-    max_input_pixels: str, antialias: bool, max_size: str | None, **view_kwargs: Any,
+    max_input_pixels: str, antialias: bool, max_size: str | None, shard: str | None,
+    **view_kwargs: Any,
 ) -> None:
     """Rectify images into canonical frontal views of the wall they show (GS-RWT).
 
@@ -353,9 +365,16 @@ def rectify(
             raise click.BadParameter(error.reason, param_hint="'--ext'") from None
         except ImageError as error:
             raise click.BadParameter(str(error).split(";")[0], param_hint="'--ext'") from None
+    shard_k_n = None
+    if shard is not None:
+        try:
+            shard_k_n = parse_shard(shard)
+        except ValueError as error:
+            raise click.BadParameter(str(error), param_hint="'--shard'") from None
     table_format = "csv"
     if table_path is None:
-        table_path = str(outdir / "gsrwt.csv")
+        name = shard_table_name("gsrwt.csv", *shard_k_n) if shard_k_n else "gsrwt.csv"
+        table_path = str(outdir / name)
     elif table_path != "-":
         table_format = format_from_extension(table_path) or ""
         if table_format not in ("csv", "tsv", "json", "jsonl"):
@@ -388,8 +407,13 @@ def rectify(
         prepare_directory(outdir, f"-o {outdir}")
     if table_path != "-":
         prepare_directory(Path(table_path).parent, f"--table {table_path}")
+    if shard_k_n is not None:  # the whole list is planned and checked, one slice is run
+        job_list = [job_list[index] for index in shard_slice(len(job_list), *shard_k_n)]
+    names = None
+    if shard_k_n is not None:  # other shards may be writing beside ours, from other machines
+        names = {job.output.name for job in job_list} | {Path(table_path).name}
     for directory in sorted({job.output.parent for job in job_list} | {outdir}):
-        remove_stale_temporaries(directory)
+        remove_stale_temporaries(directory, names=names)
     previous = previous_rows(table_path, table_format) if table_path != "-" else {}
 
     settings = Settings(

@@ -1,0 +1,100 @@
+"""``gsrwt tables merge``: the tables of ``gsrwt rectify --shard K/N`` runs as one table."""
+
+from __future__ import annotations
+
+import contextlib
+import sys
+from collections.abc import Iterator
+from typing import IO
+
+import click
+
+from ..messages import quote
+from ..outputs import open_atomic
+from ..tables import MergeError, format_from_extension, merge_tables, order_shards
+from .options import InputError
+
+MACHINE_FORMATS = ("csv", "tsv", "json", "jsonl")
+
+
+def table_format(name: str, option: str) -> str:
+    """The machine format a table's name asks for, or an :class:`InputError` naming it."""
+    fmt = format_from_extension(name)
+    if fmt not in MACHINE_FORMATS:
+        raise InputError(f"{option}{quote(name)}: a table's name must end in .csv, .tsv, "
+                         ".json or .jsonl")
+    return fmt
+
+
+@contextlib.contextmanager
+def _output(name: str) -> Iterator[IO[str]]:
+    if name == "-":
+        yield sys.stdout
+        return
+    with open_atomic(name, "w", encoding="utf-8", errors="surrogateescape",
+                     newline="") as stream:
+        yield stream
+
+
+@click.group()
+def tables() -> None:
+    """Work with the tables gsrwt writes.
+
+    \b
+    Example:
+      gsrwt rectify sample_data/views --sidecar sample_data/views/views.csv \\
+          -o sharded --shard 1/2
+      gsrwt rectify sample_data/views --sidecar sample_data/views/views.csv \\
+          -o sharded --shard 2/2
+      gsrwt tables merge sharded/gsrwt.1-of-2.csv sharded/gsrwt.2-of-2.csv \\
+          -o sharded/gsrwt.csv
+    """
+
+
+@tables.command()
+@click.argument("shard_tables", nargs=-1, required=True, metavar="TABLE...")
+@click.option("-o", "--output", "output", required=True,
+              help="The merged table (.csv, .tsv, .json, .jsonl; - for stdout).")
+@click.option("-q", "--quiet", is_flag=True, help="No summary.")
+def merge(shard_tables: tuple[str, ...], output: str, quiet: bool) -> None:
+    """Join the tables of `gsrwt rectify --shard K/N` runs into one, in input order.
+
+    Tables named NAME.K-of-N.EXT are put in shard order, and all N must be given; other
+    tables are joined in the order given. All must have the same columns.
+
+    \b
+    Example:
+      gsrwt rectify sample_data/views --sidecar sample_data/views/views.csv \\
+          -o sharded --shard 1/2
+      gsrwt rectify sample_data/views --sidecar sample_data/views/views.csv \\
+          -o sharded --shard 2/2
+      gsrwt tables merge sharded/gsrwt.1-of-2.csv sharded/gsrwt.2-of-2.csv \\
+          -o sharded/gsrwt.csv
+    """
+    out_format = "csv" if output == "-" else table_format(output, "-o ")
+    try:
+        ordered = order_shards(list(shard_tables))
+    except MergeError as error:
+        raise InputError(str(error)) from None
+    if output != "-" and output in ordered:
+        raise InputError(f"-o {output}: is one of the tables to merge; choose another path")
+    with contextlib.ExitStack() as stack:
+        streams = []
+        for name in ordered:
+            fmt = table_format(name, "")
+            try:
+                stream = stack.enter_context(open(name, encoding="utf-8",
+                                                  errors="surrogateescape", newline=""))
+            except OSError as error:
+                raise InputError(f"{name}: cannot read ({error.strerror or error})") from None
+            streams.append((name, stream, fmt))
+        try:
+            with _output(output) as stream:
+                count = merge_tables(streams, stream, out_format)
+        except MergeError as error:
+            raise InputError(str(error)) from None
+        except OSError as error:
+            raise InputError(f"-o {output}: cannot write the table "
+                             f"({error.strerror or error})") from None
+    if not quiet:
+        click.echo(f"gsrwt: {count} rows from {len(ordered)} tables", err=True)
