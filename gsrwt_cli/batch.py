@@ -16,7 +16,7 @@ import multiprocessing
 import os
 import warnings
 from collections.abc import Callable, Iterable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -396,6 +396,39 @@ class Counts:
 
 def _remove_temporaries_of(job: Job, pid: int) -> None:
     remove_stale_temporaries(job.output.parent, {pid})
+
+
+def job_for_elsewhere(job: Job) -> Job:
+    """The job with absolute paths (its image, output and calibration file), for a worker
+    whose working directory is not ours (on a cluster's machines, sharing our file system)."""
+    values = job.values
+    camera = (values or {}).get("camera")
+    if values is not None and camera and not os.path.isabs(str(camera)):
+        values = {**values, "camera": os.path.abspath(str(camera))}
+    return replace(job, source=Path(os.path.abspath(job.source)),
+                   output=Path(os.path.abspath(job.output)), values=values)
+
+
+def row_for_here(job: Job, row: dict[str, Any]) -> dict[str, Any]:
+    """A row made from :func:`job_for_elsewhere`'s job, naming the files as ``job`` does."""
+    return {**row, "image": str(job.source), "output": str(job.output)}
+
+
+def settings_for_elsewhere(settings: Settings) -> Settings:
+    """The settings with an absolute output root (:func:`job_for_elsewhere`)."""
+    root = None if settings.root is None else Path(os.path.abspath(settings.root))
+    return replace(settings, root=root)
+
+
+def remove_temporaries_left(jobs: Iterable[Job]) -> None:
+    """Remove what workers that died left half-written beside these jobs' outputs: the
+    temporaries of their file names whose process is gone (workers on other machines
+    write to object stores, or their temporaries are removed by the next run there)."""
+    by_directory: dict[Path, set[str]] = {}
+    for job in jobs:
+        by_directory.setdefault(job.output.parent, set()).add(job.output.name)
+    for directory, names in by_directory.items():
+        remove_stale_temporaries(directory, names=names)
 
 
 def run_batch(

@@ -23,9 +23,15 @@ from tqdm import tqdm
 from ..batch import (
     RECTIFY_COLUMNS,
     Counts,
+    ImageWorker,
     Settings,
+    dead_worker_row,
+    job_for_elsewhere,
     plan_jobs,
+    remove_temporaries_left,
+    row_for_here,
     run_batch,
+    settings_for_elsewhere,
     worker_context,
 )
 from ..calibration import CalibrationError
@@ -271,6 +277,31 @@ def open_table(path: str) -> Iterator[IO[str]]:
         raise TableWriteError(error.strerror or str(error)) from None  # flushing at the end
 
 
+@contextlib.contextmanager
+def dask_executor(address: str, processes: int, retries: int,
+                  settings: Settings) -> Iterator[Any]:
+    """A :class:`~gsrwt_cli.dask_executor.DaskExecutor` on the scheduler at ``address``
+    (``local``: a local cluster of ``processes`` workers), or an :class:`InputError` saying
+    how to install Dask or that the scheduler cannot be reached."""
+    os.environ.setdefault("DASK_LOGGING__DISTRIBUTED", "error")  # workers inherit it
+    try:
+        from .. import dask_executor as engine
+    except ImportError as error:
+        raise InputError(f"--scheduler {address}: needs Dask ({error.msg}); install it with "
+                         "pip install 'gsrwt[dask]'") from None
+    try:
+        with engine.connect(address, processes, retries) as client:
+            yield engine.DaskExecutor(
+                client, ImageWorker.in_own_process,
+                (settings_for_elsewhere(settings), 1 if processes > 1 else 0),
+                on_death=lambda job, reason: dead_worker_row(job, reason, settings),
+                on_close=remove_temporaries_left, retries=retries,
+                send=job_for_elsewhere, receive=row_for_here,
+            )
+    except engine.SchedulerError as error:
+        raise InputError(f"--scheduler {address}: {error}") from None
+
+
 @click.command()
 @click.argument("inputs", nargs=-1, required=True, metavar="INPUT...")
 @click.option("-o", "--output", "outdir", required=True, type=click.Path(path_type=Path),
@@ -318,6 +349,15 @@ def open_table(path: str) -> Iterator[IO[str]]:
               help="Worker processes [default: all cores].")
 @click.option("--overwrite", is_flag=True, help="Replace existing outputs instead of skipping.")
 @click.option("--dry-run", is_flag=True, help="Check everything and write the table only.")
+@click.option("--scheduler", default=None, metavar="ADDRESS", envvar="DASK_SCHEDULER_ADDRESS",
+              help="Run the images as tasks of a Dask cluster: its scheduler's address "
+                   "(tcp://HOST:8786), or local for a local cluster of -j worker processes "
+                   "[default: $DASK_SCHEDULER_ADDRESS, else worker processes here]. Needs "
+                   "pip install 'gsrwt[dask]'.")
+@click.option("--retries", type=click.IntRange(min=0), default=2, show_default=True,
+              help="With --scheduler: times a task is run again when it fails or its "
+                   "worker dies (the local cluster's; a remote scheduler keeps its own "
+                   "allowed-failures).")
 @click.option("--shard", default=None, metavar="K/N",
               help="Process only the K-th of N equal slices of the input list (Slurm array "
                    "jobs, CI matrices); the table is OUTDIR/gsrwt.K-of-N.csv; join the "
@@ -329,7 +369,7 @@ def rectify(
     interpolation: str, fill: float, alpha: bool, ext: str | None, quality: int,
     table_path: str | None, jobs: int | None, overwrite: bool, dry_run: bool, quiet: bool,
     max_input_pixels: str, antialias: bool, max_size: str | None, shard: str | None,
-    **view_kwargs: Any,
+    scheduler: str | None, retries: int, **view_kwargs: Any,
 ) -> None:
     """Rectify images into canonical frontal views of the wall they show (GS-RWT).
 
@@ -434,7 +474,12 @@ def rectify(
     counts = Counts(failed=len(unreadable))
     stopped: BaseException | None = None
     try:
-        with stop_on_signals(), open_table(table_path) as stream:
+        with stop_on_signals(), contextlib.ExitStack() as cluster:
+            executor = None
+            if scheduler:
+                executor = cluster.enter_context(
+                    dask_executor(scheduler, processes, retries, settings))
+            stream = cluster.enter_context(open_table(table_path))
             writer = TableWriter(stream, RECTIFY_COLUMNS, table_format)
 
             def on_row(row: dict[str, Any]) -> None:
@@ -452,7 +497,7 @@ def rectify(
             try:
                 run_batch(job_list, settings, processes, on_row,
                           on_progress=lambda: progress.update(1), previous=previous,
-                          context=worker_context(fork_workers))
+                          context=worker_context(fork_workers), executor=executor)
             except (KeyboardInterrupt, Terminated) as stop:
                 stopped = stop  # every job has its row: the table is still written whole
             try:
