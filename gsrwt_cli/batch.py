@@ -44,6 +44,7 @@ from .rectify import RectifyInfo, plan_image
 from .report import PARAMS_COLUMNS, params_row
 from .sidecar import Sidecar
 from .sources import Source
+from .storage import Location, fetched, is_url, open_input
 
 RECTIFY_COLUMNS = (
     *PARAMS_COLUMNS,
@@ -67,8 +68,8 @@ RECTIFY_COLUMNS = (
 class Job:
     """Everything a worker needs for one image (picklable, small)."""
 
-    source: Path
-    output: Path
+    source: Path | Location  # a local path, or a URL (:mod:`.storage`)
+    output: Path | Location
     values: dict[str, Any] | None  # raw parameters from the first source that has them
     where: str  # where the parameters came from, for messages
     error: str | None = None  # known before reading the image
@@ -97,14 +98,14 @@ class Settings:
     dry_run: bool = False
     max_input_pixels: float = DEFAULT_MAX_INPUT_PIXELS
     antialias: bool = True
-    root: Path | None = None  # the output directory: nothing is written outside it
+    root: Path | Location | None = None  # the output directory: nothing is written outside it
     #: Words an error in the caller's terms (a module-level function: it goes to workers).
     describe: Describe | None = None
 
 
 def plan_jobs(
     sources: Iterable[Source],
-    outdir: Path,
+    outdir: Path | Location,
     sidecar: Sidecar | None,
     fallback: dict[str, Any],
     extension: str | None,
@@ -115,7 +116,9 @@ def plan_jobs(
     of its job, as is an output that another job also claims.
     """
     jobs = []
-    claimed: dict[Path, Path] = {}
+    claimed: dict[Path | Location, Path | Location] = {}
+    # On an object store, which outputs exist is one listing, not a request per image.
+    present = outdir.list_objects() if isinstance(outdir, Location) else None
     for source in sources:
         relative = Path(*source.relative.parts)
         if extension is not None:
@@ -136,7 +139,10 @@ def plan_jobs(
                 check_inside(outdir, output)
             except OutsideOutputError as problem:
                 error = f"its output {output} {problem}"
-        existed = error is None and os.path.lexists(output)
+        if present is not None:
+            existed = error is None and str(output) in present
+        else:
+            existed = error is None and os.path.lexists(output)
         jobs.append(Job(source.path, output, values, where, error, existed))
     return jobs
 
@@ -202,13 +208,13 @@ def _view(job: Job) -> tuple[View, str]:
         raise _JobError(str(error)) from None
 
 
-def _exif_focal(path: Path) -> ExifFocal | None:
+def _exif_focal(path: Path | Location) -> ExifFocal | None:
     """The focal length the image's EXIF gives (:func:`~gsrwt_cli.exif.focal_from_exif`)."""
     try:
         size = image_file_size(path)
         if size is None:
             return None
-        with open(path, "rb") as handle:
+        with open_input(path) as handle:
             head = handle.read(1 << 20)  # EXIF lives in the first 64 KB segment
     except OSError:
         return None
@@ -241,7 +247,7 @@ def process_job(job: Job, settings: Settings, scratch: Scratch | None = None) ->
     scratch = scratch or Scratch()
     row: dict[str, Any] = {"image": str(job.source), "output": str(job.output)}
     try:
-        with np.errstate(all="ignore"), warnings.catch_warnings():
+        with np.errstate(all="ignore"), warnings.catch_warnings(), fetched(job.source):
             warnings.simplefilter("ignore")
             view, source = _view(job)
             row.update(params_row(view, str(job.source)), focal_source=source)
@@ -403,10 +409,14 @@ def job_for_elsewhere(job: Job) -> Job:
     whose working directory is not ours (on a cluster's machines, sharing our file system)."""
     values = job.values
     camera = (values or {}).get("camera")
-    if values is not None and camera and not os.path.isabs(str(camera)):
+    if values is not None and camera and not is_url(camera) and not os.path.isabs(str(camera)):
         values = {**values, "camera": os.path.abspath(str(camera))}
-    return replace(job, source=Path(os.path.abspath(job.source)),
-                   output=Path(os.path.abspath(job.output)), values=values)
+    return replace(job, source=_absolute(job.source), output=_absolute(job.output),
+                   values=values)
+
+
+def _absolute(path: Path | Location) -> Path | Location:
+    return path if isinstance(path, Location) else Path(os.path.abspath(path))
 
 
 def row_for_here(job: Job, row: dict[str, Any]) -> dict[str, Any]:
@@ -416,7 +426,7 @@ def row_for_here(job: Job, row: dict[str, Any]) -> dict[str, Any]:
 
 def settings_for_elsewhere(settings: Settings) -> Settings:
     """The settings with an absolute output root (:func:`job_for_elsewhere`)."""
-    root = None if settings.root is None else Path(os.path.abspath(settings.root))
+    root = None if settings.root is None else _absolute(settings.root)
     return replace(settings, root=root)
 
 
@@ -426,7 +436,8 @@ def remove_temporaries_left(jobs: Iterable[Job]) -> None:
     write to object stores, or their temporaries are removed by the next run there)."""
     by_directory: dict[Path, set[str]] = {}
     for job in jobs:
-        by_directory.setdefault(job.output.parent, set()).add(job.output.name)
+        if not isinstance(job.output, Location):  # object stores have no temporaries
+            by_directory.setdefault(job.output.parent, set()).add(job.output.name)
     for directory, names in by_directory.items():
         remove_stale_temporaries(directory, names=names)
 

@@ -50,6 +50,7 @@ import yaml
 from .camera import LENS_MODELS, Intrinsics, Lens, ViewError
 from .messages import one_line, quote
 from .safe_yaml import YamlInputError, load_yaml
+from .storage import open_input
 
 #: Calibration files larger than this are refused unread (a real one is a few kilobytes;
 #: OpenCV's sample with per-view extrinsics is 5 KB).
@@ -120,7 +121,7 @@ def load_camera(path: str | Path) -> Intrinsics:
 
 def _read_text(path: str | Path) -> str:
     try:
-        with open(path, "rb") as file:
+        with open_input(path) as file:
             data = file.read(MAX_FILE_BYTES + 1)
     except IsADirectoryError:
         raise CalibrationError(path, None, "is a directory, not a calibration file") from None

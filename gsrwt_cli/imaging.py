@@ -25,6 +25,7 @@ import imagesize
 import numpy as np
 
 from .pixelmap import PixelMap
+from .storage import open_input
 
 #: File types gsrwt looks for in directories (OpenCV reads them all).
 IMAGE_EXTENSIONS = (".jpg", ".jpeg", ".jpe", ".png", ".tif", ".tiff", ".bmp", ".webp")
@@ -148,7 +149,7 @@ def check_writable(
 def read_file_bytes(path: str | Path) -> bytes:
     """The bytes of a file, read by Python (any file name the system allows, none to OpenCV)."""
     try:
-        with open(path, "rb") as handle:
+        with open_input(path) as handle:
             return handle.read()
     except IsADirectoryError:
         raise ImageError("is a directory, not an image") from None
@@ -176,7 +177,7 @@ def header_size(data: bytes | IO[bytes]) -> tuple[int, int] | None:
 def image_file_size(path: str | Path) -> tuple[int, int] | None:
     """``(width, height)`` of an image file from its header (:func:`header_size`)."""
     try:
-        with open(path, "rb") as handle:
+        with open_input(path) as handle:
             return header_size(handle)
     except OSError:
         return None
@@ -186,7 +187,7 @@ def measure_image_file(path: str | Path, max_pixels: float) -> tuple[int, int]:
     """``(width, height)`` of an image file from its header, refused as :func:`decode_image`
     would refuse it (empty, unreadable, unmeasurable, above ``max_pixels``), undecoded."""
     try:
-        with open(path, "rb") as handle:
+        with open_input(path) as handle:
             if not handle.read(1):
                 raise ImageError("empty file")
             handle.seek(0)

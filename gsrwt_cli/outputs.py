@@ -13,12 +13,15 @@ from __future__ import annotations
 
 import contextlib
 import errno
+import io
 import os
 import re
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path, PurePosixPath
-from typing import IO
+from typing import IO, Any
+
+from .storage import Location
 
 #: Temporary files of ours: ``.NAME.gsrwt-PID-RANDOM.part``.
 TEMPORARY_PATTERN = re.compile(r"^\..*\.gsrwt-(\d+)-[A-Za-z0-9_]+\.part$")
@@ -61,13 +64,18 @@ def relative_output(name: str) -> PurePosixPath:
     return PurePosixPath(*parts)
 
 
-def check_inside(root: str | Path, target: str | Path) -> None:
+def check_inside(root: str | Path | Location, target: str | Path | Location) -> None:
     """Raise :class:`OutsideOutputError` unless ``target``'s directory lies inside ``root``.
 
     ``target``'s directory is resolved (symbolic links followed, as far as it exists) and
     must be ``root``'s real path or below it. The target itself may be a
     symbolic link: :func:`open_atomic` replaces the link, never what it points to.
     """
+    if isinstance(root, Location) or isinstance(target, Location):
+        if not (isinstance(root, Location) and isinstance(target, Location)
+                and target.parent.is_inside(root)):
+            raise OutsideOutputError(f"would be written outside the output {root}")
+        return
     real_root = os.path.realpath(root)  # the parts that do not exist yet are taken as given
     real_parent = os.path.realpath(Path(os.path.abspath(target)).parent)
     if real_parent != real_root and not real_parent.startswith(real_root.rstrip(os.sep) + os.sep):
@@ -79,7 +87,8 @@ def check_inside(root: str | Path, target: str | Path) -> None:
 
 @contextlib.contextmanager
 def open_atomic(
-    path: str | Path, mode: str = "wb", *, root: str | Path | None = None, **kwargs: object
+    path: str | Path | Location, mode: str = "wb", *, root: str | Path | Location | None = None,
+    **kwargs: Any,
 ) -> Iterator[IO]:
     """A file that appears at ``path`` whole, when the ``with`` block ends without error.
 
@@ -89,6 +98,10 @@ def open_atomic(
     untouched. ``root``: the output the user named; the file must lie inside it
     (:func:`check_inside`), checked before and after the directories are made.
     """
+    if isinstance(path, Location):
+        with _open_whole(path, mode, root=root, **kwargs) as stream:
+            yield stream
+        return
     path = Path(path)
     if root is not None:
         check_inside(root, path)
@@ -112,7 +125,29 @@ def open_atomic(
         raise
 
 
-def write_atomic(path: str | Path, data: bytes, *, root: str | Path | None = None) -> None:
+@contextlib.contextmanager
+def _open_whole(
+    path: Location, mode: str, *, root: str | Path | Location | None, **kwargs: Any
+) -> Iterator[IO]:
+    """:func:`open_atomic` on an object store: the data is kept in memory and sent in one
+    request when the block ends without error (:meth:`~.storage.Location.write_whole`),
+    so the object appears whole or not at all and nothing is left behind on error."""
+    if root is not None:
+        check_inside(root, path)
+    if "b" in mode:
+        binary = io.BytesIO()
+        yield binary
+        path.write_whole(binary.getvalue())
+        return
+    text = io.StringIO(newline=kwargs.get("newline"))  # type: ignore[arg-type]
+    yield text
+    encoding = str(kwargs.get("encoding") or "utf-8")
+    path.write_whole(text.getvalue().encode(encoding, str(kwargs.get("errors") or "strict")))
+
+
+def write_atomic(
+    path: str | Path | Location, data: bytes, *, root: str | Path | Location | None = None
+) -> None:
     """Write ``data`` to ``path`` whole or not at all (:func:`open_atomic`)."""
     with open_atomic(path, "wb", root=root) as handle:
         handle.write(data)

@@ -37,6 +37,7 @@ from .camera import VIEW_FIELDS, View
 from .messages import escape_controls, one_line, quote
 from .records import SIDECAR_FIELDS, merge_values, view_from_values
 from .safe_yaml import YamlInputError, load_yaml
+from .storage import is_url, location
 
 
 class SidecarError(ValueError):
@@ -69,9 +70,11 @@ def _with_camera_path(sidecar: Path, values: dict[str, Any]) -> dict[str, Any]:
     camera = values.get("camera")
     if camera is None or str(camera).strip() == "":
         return values
+    if is_url(str(camera).strip()):
+        return {**values, "camera": str(camera).strip()}
     camera_path = Path(str(camera).strip())
     if not camera_path.is_absolute():
-        camera_path = sidecar.parent / camera_path
+        return {**values, "camera": str(sidecar.parent / camera_path)}
     return {**values, "camera": str(camera_path)}
 
 
@@ -146,7 +149,7 @@ def read_sidecar_text(path: Path) -> str:
 
 def load_sidecar(path: str | Path) -> Sidecar:
     """Read a CSV, TSV or YAML sidecar; raises :class:`SidecarError` naming the file."""
-    path = Path(path)
+    path = location(path)  # a local path, or a URL (s3://...)
     suffix = path.suffix.lower()
     if suffix not in (".yaml", ".yml", ".csv", ".tsv", ".txt"):
         _check_is_file(path)  # a missing file is reported as such first

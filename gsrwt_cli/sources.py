@@ -8,17 +8,18 @@ from dataclasses import dataclass
 from pathlib import Path, PurePosixPath
 
 from .imaging import IMAGE_EXTENSIONS
+from .storage import Location, list_files
 
 
 @dataclass(frozen=True)
 class Source:
     """An input image and the relative path its output keeps."""
 
-    path: Path
+    path: Path | Location  # a local path, or a URL (:mod:`.storage`)
     relative: PurePosixPath
 
 
-def is_image_name(path: Path) -> bool:
+def is_image_name(path: Path | Location) -> bool:
     return path.suffix.lower() in IMAGE_EXTENSIONS and not path.name.startswith(".")
 
 
@@ -60,3 +61,11 @@ def source_from_listed_path(text: str) -> Source:
     if path.is_absolute() or ".." in pure.parts:
         return Source(path, PurePosixPath(path.name))
     return Source(path, PurePosixPath(*[part for part in pure.parts if part != "."]))
+
+
+def sources_from_location(prefix: Location, recursive: bool) -> list[Source]:
+    """Images below a URL prefix (sorted; its own level unless ``recursive``), with paths
+    relative to it, hidden names skipped: one listing of the store
+    (:func:`~gsrwt_cli.storage.list_files`)."""
+    return [Source(item, relative) for item, relative in list_files(prefix, recursive)
+            if is_image_name(item)]

@@ -14,6 +14,7 @@ from ..imaging import INTERPOLATIONS
 from ..landmarks import DEFAULT_EDGE_THRESHOLD
 from ..messages import one_line
 from ..records import VIEW_FIELDS, RecordError, view_from_values
+from ..storage import Location, location
 from ..tables import FORMATS
 from ..targets import (
     DirectoryTargetError,
@@ -26,6 +27,22 @@ from ..targets import (
 from ..targets import make_output_directory as create_directory
 
 F = TypeVar("F", bound=Callable[..., Any])
+
+
+class PathOrUrl(click.Path):
+    """A path (a :class:`~pathlib.Path`, checked as ``click.Path`` checks it) or a URL
+    such as ``s3://bucket/run1/`` (a :class:`~gsrwt_cli.storage.Location`, checked by its
+    store when used); ``file://`` URLs are paths."""
+
+    def __init__(self, **kwargs: Any) -> None:
+        super().__init__(path_type=Path, **kwargs)
+
+    def convert(self, value: Any, param: click.Parameter | None,
+                ctx: click.Context | None) -> Any:
+        found = location(value) if isinstance(value, str) else value
+        if isinstance(found, Location):
+            return found
+        return super().convert(str(found), param, ctx)
 
 
 class InputError(click.ClickException):

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import contextlib
 import csv
+import io
 import math
 import os
 import signal
@@ -48,7 +49,13 @@ from ..outputs import open_atomic, remove_stale_temporaries
 from ..records import load_camera_file
 from ..rectify import MissingDistanceError
 from ..sidecar import SidecarError, load_sidecar
-from ..sources import Source, source_from_listed_path, sources_from_directory
+from ..sources import (
+    Source,
+    source_from_listed_path,
+    sources_from_directory,
+    sources_from_location,
+)
+from ..storage import Location, location
 from ..tables import (
     TableWriter,
     format_from_extension,
@@ -57,7 +64,7 @@ from ..tables import (
     shard_slice,
     shard_table_name,
 )
-from .options import InputError, view_defaults, view_options
+from .options import InputError, PathOrUrl, view_defaults, view_options
 
 
 def parse_bbox(text: str) -> str | tuple[float, float, float, float]:
@@ -129,8 +136,10 @@ def collect_sources(inputs: tuple[str, ...], recursive: bool) -> tuple[list[Sour
             names = [os.fsdecode(line.strip()) for line in data.split(b"\n")]
             sources += [source_from_listed_path(name) for name in names if name]
             continue
-        path = Path(text)
-        if path.is_dir():
+        path = location(text)
+        if isinstance(path, Location):
+            sources += sources_at_url(text, path, recursive)
+        elif path.is_dir():
             try:
                 sources += sources_from_directory(path, recursive, unreadable)
             except OSError as error:
@@ -142,38 +151,65 @@ def collect_sources(inputs: tuple[str, ...], recursive: bool) -> tuple[list[Sour
     return sources, unreadable
 
 
+def sources_at_url(text: str, url: Location, recursive: bool) -> list[Source]:
+    """The image a URL names, or the images below it (one listing), or an InputError."""
+    try:
+        if url.is_file():
+            return [Source(url, PurePosixPath(url.name))]
+        found = sources_from_location(url, recursive)
+    except (OSError, ValueError) as error:
+        raise InputError(f"{text}: cannot read ({one_line(str(error), 200)})") from None
+    if not found and not url.exists():
+        raise InputError(f"{text}: no such file or directory")
+    return found
+
+
+def real(path: Path | Location) -> str:
+    """What a name stands for, to compare: a URL as it is, a path with links resolved."""
+    return str(path) if isinstance(path, Location) else os.path.realpath(path)
+
+
 def refuse_unsafe_outputs(
-    inputs: tuple[str, ...], sources: list[Source], outputs: list[Path], outdir: Path,
-    recursive: bool, table: Path | None, sidecar: Path | None,
+    inputs: tuple[str, ...], sources: list[Source], outputs: list[Path | Location],
+    outdir: Path | Location, recursive: bool, table: Path | Location | None,
+    sidecar: Path | Location | None,
 ) -> None:
-    """Refuse, before writing anything, a run that could overwrite what the user gave us."""
-    if outdir.exists() and not outdir.is_dir():
+    """Refuse, before writing anything, a run that could overwrite what the user gave us
+    (local paths or URLs alike)."""
+    if isinstance(outdir, Path) and outdir.exists() and not outdir.is_dir():
         raise InputError(f"-o {outdir}: exists and is not a directory")
-    given = {os.path.realpath(s.path) for s in sources}
+    given = {real(s.path) for s in sources}
     for source, output in zip(sources, outputs):
-        if os.path.realpath(output) in given:
+        if real(output) in given:
             raise InputError(
                 f"-o {outdir}: output {output} would overwrite the input {source.path}; "
                 "choose another output directory"
             )
     if recursive:
-        real_outdir = os.path.realpath(outdir)
+        real_outdir = real(outdir)
         for text in inputs:
-            if text != "-" and Path(text).is_dir():
-                real_input = os.path.realpath(text)
-                if real_outdir == real_input or real_outdir.startswith(real_input + os.sep):
+            given_input = location(text) if text != "-" else None
+            if given_input is not None and (isinstance(given_input, Location)
+                                            or given_input.is_dir()):
+                real_input = real(given_input)
+                separator = "/" if isinstance(given_input, Location) else os.sep
+                if real_outdir == real_input or real_outdir.startswith(real_input + separator):
                     raise InputError(
                         f"-o {outdir}: is inside the input directory {text}, where a later "
                         "--recursive run would take outputs for inputs; choose another"
                     )
     if table is not None:
-        protected = given | ({os.path.realpath(sidecar)} if sidecar else set())
-        if os.path.realpath(table) in protected:
+        protected = given | ({real(sidecar)} if sidecar else set())
+        if real(table) in protected:
             raise InputError(f"--table {table}: would overwrite an input; choose another path")
 
 
-def prepare_directory(directory: Path, what: str) -> None:
-    """Make ``directory`` and prove it writable (a temporary file), or raise InputError."""
+def prepare_directory(directory: Path | Location, what: str) -> None:
+    """Make ``directory`` and prove it writable (a temporary file), or raise InputError.
+
+    An object store has no directories to make: its first write says whether it can."""
+    if isinstance(directory, Location):
+        return
     blocker = next((p for p in [directory, *directory.parents] if p.exists()), None)
     if blocker is not None and not blocker.is_dir():
         raise InputError(f"{what}: cannot write there ({blocker} is not a directory)")
@@ -192,8 +228,13 @@ def prepare_directory(directory: Path, what: str) -> None:
 def previous_rows(path: str, fmt: str) -> dict[tuple[str, str], dict[str, Any]]:
     """The last run's table at ``path``, by ``(image, output)``; empty if there is none."""
     try:
-        with open(path, encoding="utf-8", errors="surrogateescape", newline="") as stream:
-            rows = read_table(stream, fmt)
+        table = location(path)
+        if isinstance(table, Location):
+            text = table.read_bytes().decode("utf-8", "surrogateescape")
+            rows = read_table(io.StringIO(text, newline=""), fmt)
+        else:
+            with open(table, encoding="utf-8", errors="surrogateescape", newline="") as stream:
+                rows = read_table(stream, fmt)
     except (OSError, ValueError, csv.Error):
         return {}
     return {
@@ -267,7 +308,7 @@ def open_table(path: str) -> Iterator[IO[str]]:
         return
     finished = False
     try:
-        with open_atomic(path, "w", encoding="utf-8", errors="surrogateescape",
+        with open_atomic(location(path), "w", encoding="utf-8", errors="surrogateescape",
                          newline="") as stream:
             yield stream
             finished = True
@@ -304,12 +345,13 @@ def dask_executor(address: str, processes: int, retries: int,
 
 @click.command()
 @click.argument("inputs", nargs=-1, required=True, metavar="INPUT...")
-@click.option("-o", "--output", "outdir", required=True, type=click.Path(path_type=Path),
-              help="Output directory (created if needed).")
+@click.option("-o", "--output", "outdir", required=True, type=PathOrUrl(),
+              help="Output directory (created if needed), or a URL prefix (s3://bucket/out/).")
 @click.option("-r", "--recursive", is_flag=True,
               help="Descend into directories and mirror their tree under OUTDIR.")
-@click.option("--sidecar", type=click.Path(path_type=Path, dir_okay=False),
-              help="CSV or YAML of per-image parameters (rows match by relative path or name).")
+@click.option("--sidecar", type=PathOrUrl(dir_okay=False),
+              help="CSV or YAML of per-image parameters (rows match by relative path or name); "
+                   "a path or a URL.")
 @view_options
 @click.option("--bbox", default="frontal", show_default=True,
               help="Output extent: frontal (the thesis's box, the input's size), full (the "
@@ -441,19 +483,20 @@ def rectify(
             raise InputError(str(error)) from None
     refuse_unsafe_outputs(
         inputs, sources, [job.output for job in job_list], outdir, recursive,
-        None if table_path == "-" else Path(table_path), sidecar,
+        None if table_path == "-" else location(table_path), sidecar,
     )
     if not dry_run:
         prepare_directory(outdir, f"-o {outdir}")
     if table_path != "-":
-        prepare_directory(Path(table_path).parent, f"--table {table_path}")
+        prepare_directory(location(table_path).parent, f"--table {table_path}")
     if shard_k_n is not None:  # the whole list is planned and checked, one slice is run
         job_list = [job_list[index] for index in shard_slice(len(job_list), *shard_k_n)]
     names = None
     if shard_k_n is not None:  # other shards may be writing beside ours, from other machines
-        names = {job.output.name for job in job_list} | {Path(table_path).name}
-    for directory in sorted({job.output.parent for job in job_list} | {outdir}):
-        remove_stale_temporaries(directory, names=names)
+        names = {job.output.name for job in job_list} | {location(table_path).name}
+    for directory in sorted({job.output.parent for job in job_list} | {outdir}, key=str):
+        if not isinstance(directory, Location):  # object stores have no temporaries
+            remove_stale_temporaries(directory, names=names)
     previous = previous_rows(table_path, table_format) if table_path != "-" else {}
 
     settings = Settings(

@@ -1,0 +1,235 @@
+"""Files in object stores and other fsspec file systems, named by URL (``s3://bucket/run1/``,
+``gs://``, ``memory://``), beside local paths.
+
+A :class:`Location` is a URL with the few methods of :class:`pathlib.Path` that the batch
+uses (``name``, ``suffix``, ``parent``, ``/``, ``exists``, ``is_file``, ``read_bytes``), so
+that jobs, sidecars and tables carry either; local paths never come here (``file://`` URLs
+become paths: :func:`location`), so they keep their own code path. fsspec (the ``dask``
+extra) is imported on first use; credentials and endpoints come from its usual
+configuration (``AWS_ACCESS_KEY_ID``, ``AWS_ENDPOINT_URL``, ``FSSPEC_S3_ENDPOINT_URL``...).
+
+Writes are whole: :meth:`Location.write_whole` sends the object in one request (one PUT on
+S3, or a multipart upload that the store shows only once complete), never a partial
+object. A process keeps the names of the directories it listed (:func:`list_files`), so
+that looking for ``NAME.yaml`` beside 100,000 listed images asks the store nothing more;
+:meth:`Location.exists` always asks (outputs change while a batch runs).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import posixpath
+import re
+import threading
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path, PurePosixPath
+from typing import IO, Any
+
+#: ``scheme://``: a URL, not a path.
+URL_PATTERN = re.compile(r"^[A-Za-z][A-Za-z0-9+.-]*://")
+
+_LISTED: dict[str, set[str]] = {}  # directory URL -> names of the files listed in it
+_FETCHED = threading.local()  # the object a job of this thread read whole: url, bytes
+
+
+def is_url(text: object) -> bool:
+    """Whether ``text`` (a string) is a URL such as ``s3://bucket/key``."""
+    return isinstance(text, str) and bool(URL_PATTERN.match(text))
+
+
+def location(text: str | Path) -> Path | Location:
+    """A local :class:`~pathlib.Path` for a path or a ``file://`` URL, else a
+    :class:`Location`."""
+    if isinstance(text, Location | Path):
+        return text
+    if is_url(text):
+        if text.lower().startswith("file://"):
+            return Path(text[len("file://"):] or "/")
+        return Location(text)
+    return Path(text)
+
+
+def _filesystem(url: str) -> tuple[Any, str]:
+    import fsspec  # the dask extra; imported here so that local runs never import it
+
+    return fsspec.core.url_to_fs(url)
+
+
+@dataclass(frozen=True)
+class Location:
+    """An object (or a prefix) in an fsspec file system, named by its URL."""
+
+    url: str
+
+    def __post_init__(self) -> None:
+        scheme, rest = self.url.split("://", 1)
+        object.__setattr__(self, "url", f"{scheme}://{rest.rstrip('/') or rest}")
+
+    def __str__(self) -> str:
+        return self.url
+
+    def __fspath__(self) -> str:  # never a local file by mistake: open() refuses it
+        raise TypeError(f"{self.url} is a URL, not a local path")
+
+    # -- names ---------------------------------------------------------------------------
+    @property
+    def _key(self) -> str:
+        return self.url.split("://", 1)[1]
+
+    @property
+    def name(self) -> str:
+        return posixpath.basename(self._key)
+
+    @property
+    def suffix(self) -> str:
+        return PurePosixPath(self.name).suffix
+
+    @property
+    def stem(self) -> str:
+        return PurePosixPath(self.name).stem
+
+    @property
+    def parent(self) -> Location:
+        head = posixpath.dirname(self._key)
+        return Location(f"{self.url.split('://', 1)[0]}://{head or self._key}")
+
+    def __truediv__(self, other: str | PurePosixPath) -> Location:
+        relative = PurePosixPath(str(other).replace("\\", "/")).as_posix().lstrip("/")
+        return Location(f"{self.url}/{relative}")
+
+    def with_name(self, name: str) -> Location:
+        return self.parent / name
+
+    def with_suffix(self, suffix: str) -> Location:
+        return self.with_name(PurePosixPath(self.name).with_suffix(suffix).name)
+
+    def is_absolute(self) -> bool:
+        return True
+
+    def is_inside(self, root: Location) -> bool:
+        """Whether this URL is ``root`` or below it (the same store and a longer key)."""
+        return self.url == root.url or self.url.startswith(root.url.rstrip("/") + "/")
+
+    # -- the store -----------------------------------------------------------------------
+    def exists(self) -> bool:
+        """Whether an object (or a prefix) is there now: the store is asked."""
+        fs, path = _filesystem(self.url)
+        return bool(fs.exists(path))
+
+    def is_file(self) -> bool:
+        """Whether an object is there: from this process's listing of its directory
+        (:func:`list_files`) if it made one, else the store is asked."""
+        listed = _LISTED.get(self.parent.url)
+        if listed is not None:
+            return self.name in listed
+        fs, path = _filesystem(self.url)
+        try:
+            return bool(fs.isfile(path))
+        except OSError:
+            return False
+
+    def is_dir(self) -> bool:
+        fs, path = _filesystem(self.url)
+        try:
+            return bool(fs.isdir(path))
+        except OSError:
+            return False
+
+    def read_bytes(self, limit: int | None = None) -> bytes:
+        """The object's bytes (its first ``limit``): the one a job of this thread fetched
+        (:func:`fetched`) if it is this one, else from the store (``FileNotFoundError``...)."""
+        cached = getattr(_FETCHED, "item", None)
+        if cached is not None and cached[0] == self.url:
+            return cached[1] if limit is None else cached[1][:limit]
+        fs, path = _filesystem(self.url)
+        if fs.isdir(path):
+            raise IsADirectoryError(21, "Is a directory", self.url)
+        return fs.cat_file(path, start=None, end=limit)
+
+    def read_text(self, encoding: str = "utf-8", errors: str = "strict") -> str:
+        return self.read_bytes().decode(encoding, errors)
+
+    def open_read(self) -> IO[bytes]:
+        """A binary stream of the object: from the fetched bytes if a job fetched it, else a
+        buffered reader that fetches what is read (headers stay small reads)."""
+        cached = getattr(_FETCHED, "item", None)
+        if cached is not None and cached[0] == self.url:
+            return io.BytesIO(cached[1])
+        fs, path = _filesystem(self.url)
+        if fs.isdir(path):
+            raise IsADirectoryError(21, "Is a directory", self.url)
+        return fs.open(path, "rb", block_size=1 << 16, cache_type="readahead")
+
+    def write_whole(self, data: bytes) -> None:
+        """Write the object in one request: it appears whole or not at all."""
+        fs, path = _filesystem(self.url)
+        fs.pipe_file(path, bytes(data))
+
+    def list_objects(self) -> set[str]:
+        """The URLs of every object below this prefix (one listing), empty if none."""
+        fs, _ = _filesystem(self.url)
+        base = fs._strip_protocol(self.url).rstrip("/")
+        try:
+            names = fs.find(base, withdirs=False, detail=False)
+        except (FileNotFoundError, NotADirectoryError):
+            return set()
+        return {(self / fs._strip_protocol(name)[len(base) + 1:]).url for name in names
+                if fs._strip_protocol(name).startswith(base + "/")}
+
+
+def list_files(prefix: Location, recursive: bool) -> list[tuple[Location, PurePosixPath]]:
+    """Every object below ``prefix`` (only its own level unless ``recursive``), sorted, with
+    its path relative to ``prefix``; names beginning with a dot (and what lies below them)
+    are left out. The names are kept for :meth:`Location.is_file`. One listing of the store.
+    """
+    fs, path = _filesystem(prefix.url)
+    base = fs._strip_protocol(prefix.url).rstrip("/")
+    found = fs.find(base, maxdepth=None if recursive else 1, withdirs=False, detail=False)
+    files = []
+    for name in sorted(found):
+        stripped = fs._strip_protocol(name)
+        if not stripped.startswith(base + "/"):
+            continue
+        relative = PurePosixPath(stripped[len(base) + 1:])
+        item = prefix / relative.as_posix()
+        _LISTED.setdefault(item.parent.url, set()).add(item.name)
+        if any(part.startswith(".") for part in relative.parts):
+            continue
+        files.append((item, relative))
+    _LISTED.setdefault(prefix.url, set())
+    return files
+
+
+@contextlib.contextmanager
+def fetched(source: object) -> Iterator[None]:
+    """While the block runs, this thread reads ``source`` (a :class:`Location`) from one
+    whole fetch of it: a job's header, EXIF and pixels cost one request, not three. A
+    local path, or an object that cannot be read (the job says why later), is left alone."""
+    if not isinstance(source, Location):
+        yield
+        return
+    try:
+        fs, path = _filesystem(source.url)
+        data = fs.cat_file(path)
+    except Exception:
+        yield
+        return
+    _FETCHED.item = (source.url, data)
+    try:
+        yield
+    finally:
+        _FETCHED.item = None
+
+
+def open_input(path: str | Path | Location) -> IO[bytes]:
+    """A binary stream of a local file (``open``) or of an object named by URL."""
+    if isinstance(path, Location):
+        return path.open_read()
+    if is_url(path):
+        resolved = location(str(path))
+        if isinstance(resolved, Location):
+            return resolved.open_read()
+        path = resolved
+    return open(path, "rb")
