@@ -252,7 +252,9 @@ def process_job(job: Job, settings: Settings, scratch: Scratch | None = None) ->
             view, source = _view(job)
             row.update(params_row(view, str(job.source)), focal_source=source)
             if job.output.exists() and not settings.overwrite:
-                return record_row(job, settings)
+                # Written since the run began: by this run's own earlier try of the job
+                # (a worker that died after writing it, its task run again), so done.
+                return record_row(job, settings, "skipped" if job.existed else "ok")
             if not job.source.is_file():
                 raise _JobError("no such file" if not job.source.exists() else "not a file")
             width, height = measure_image_file(job.source, settings.max_input_pixels)

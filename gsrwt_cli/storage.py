@@ -54,7 +54,9 @@ def location(text: str | Path) -> Path | Location:
 def _filesystem(url: str) -> tuple[Any, str]:
     import fsspec  # the dask extra; imported here so that local runs never import it
 
-    return fsspec.core.url_to_fs(url)
+    # No listings cache: outputs appear while a batch runs, and a stale listing would call
+    # a written object missing (this module keeps its own names of listed inputs).
+    return fsspec.core.url_to_fs(url, use_listings_cache=False)
 
 
 @dataclass(frozen=True)
@@ -179,20 +181,29 @@ class Location:
                 if fs._strip_protocol(name).startswith(base + "/")}
 
 
+def walk_order(relative: PurePosixPath) -> tuple[tuple[int, str], ...]:
+    """The order in which a sorted ``os.walk`` meets files: a directory's own files (by
+    name) before its subdirectories (by name, each walked in turn)."""
+    *directories, name = relative.parts
+    return (*((1, part) for part in directories), (0, name))
+
+
 def list_files(prefix: Location, recursive: bool) -> list[tuple[Location, PurePosixPath]]:
-    """Every object below ``prefix`` (only its own level unless ``recursive``), sorted, with
-    its path relative to ``prefix``; names beginning with a dot (and what lies below them)
-    are left out. The names are kept for :meth:`Location.is_file`. One listing of the store.
+    """Every object below ``prefix`` (only its own level unless ``recursive``), in the order
+    a local directory's walk gives (:func:`walk_order`), with its path relative to
+    ``prefix``; names beginning with a dot (and what lies below them) are left out. The
+    names are kept for :meth:`Location.is_file`. One listing of the store.
     """
     fs, path = _filesystem(prefix.url)
     base = fs._strip_protocol(prefix.url).rstrip("/")
     found = fs.find(base, maxdepth=None if recursive else 1, withdirs=False, detail=False)
-    files = []
-    for name in sorted(found):
+    listed = []
+    for name in found:
         stripped = fs._strip_protocol(name)
-        if not stripped.startswith(base + "/"):
-            continue
-        relative = PurePosixPath(stripped[len(base) + 1:])
+        if stripped.startswith(base + "/"):
+            listed.append(PurePosixPath(stripped[len(base) + 1:]))
+    files = []
+    for relative in sorted(listed, key=walk_order):
         item = prefix / relative.as_posix()
         _LISTED.setdefault(item.parent.url, set()).add(item.name)
         if any(part.startswith(".") for part in relative.parts):

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import io
 import sys
 from collections.abc import Iterator
 from typing import IO
@@ -11,6 +12,7 @@ import click
 
 from ..messages import quote
 from ..outputs import open_atomic
+from ..storage import Location, location
 from ..tables import MergeError, format_from_extension, merge_tables, order_shards
 from .options import InputError
 
@@ -31,9 +33,17 @@ def _output(name: str) -> Iterator[IO[str]]:
     if name == "-":
         yield sys.stdout
         return
-    with open_atomic(name, "w", encoding="utf-8", errors="surrogateescape",
+    with open_atomic(location(name), "w", encoding="utf-8", errors="surrogateescape",
                      newline="") as stream:
         yield stream
+
+
+def _input(name: str) -> IO[str]:
+    """A table to read: a local file, or an object named by URL (read whole)."""
+    found = location(name)
+    if isinstance(found, Location):
+        return io.StringIO(found.read_bytes().decode("utf-8", "surrogateescape"), newline="")
+    return open(found, encoding="utf-8", errors="surrogateescape", newline="")
 
 
 @click.group()
@@ -54,7 +64,8 @@ def tables() -> None:
 @tables.command()
 @click.argument("shard_tables", nargs=-1, required=True, metavar="TABLE...")
 @click.option("-o", "--output", "output", required=True,
-              help="The merged table (.csv, .tsv, .json, .jsonl; - for stdout).")
+              help="The merged table (.csv, .tsv, .json, .jsonl; - for stdout); a path or a "
+                   "URL, as are the TABLEs.")
 @click.option("-q", "--quiet", is_flag=True, help="No summary.")
 def merge(shard_tables: tuple[str, ...], output: str, quiet: bool) -> None:
     """Join the tables of `gsrwt rectify --shard K/N` runs into one, in input order.
@@ -83,8 +94,7 @@ def merge(shard_tables: tuple[str, ...], output: str, quiet: bool) -> None:
         for name in ordered:
             fmt = table_format(name, "")
             try:
-                stream = stack.enter_context(open(name, encoding="utf-8",
-                                                  errors="surrogateescape", newline=""))
+                stream = stack.enter_context(_input(name))
             except OSError as error:
                 raise InputError(f"{name}: cannot read ({error.strerror or error})") from None
             streams.append((name, stream, fmt))
