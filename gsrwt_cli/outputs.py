@@ -4,7 +4,10 @@ Every file any command writes (images, sidecars, tables, drawings) goes through
 :func:`open_atomic`: a temporary file in the target's directory, renamed over the target when
 complete, so no reader ever sees a partial file. Temporary names carry the writer's process id
 (``.NAME.gsrwt-PID-XXXX.part``), so that a later run can remove those whose process is gone
-(:func:`remove_stale_temporaries`). Given the output ``root``, a write whose real location
+(:func:`remove_stale_temporaries`). On an object store (a
+:class:`~gsrwt_cli.storage.Location`) there is no rename: the data is sent in one request
+when complete, so no partial object exists either. Given the output ``root``, a write whose
+real location
 (symbolic links resolved) is not inside the root's real location is refused with
 :class:`OutsideOutputError`, before any directory is created.
 """

@@ -182,10 +182,10 @@ class Doubler:
         return item * 2 + self.offset, os.getpid()
 
 
-def test_tasks_run_in_a_bounded_window_and_a_raising_task_is_a_row(cluster):
+def test_tasks_run_in_a_bounded_window_and_only_a_raising_item_is_an_error_row(cluster):
     _, client = cluster
     peak = []
-    executor = DaskExecutor(client, Doubler, (1,), retries=1, window=5,
+    executor = DaskExecutor(client, Doubler, (1,), retries=1, window=5, chunk=3,
                             on_death=lambda item, reason: (-item, reason))
     results = {}
     for index, result in executor.map_unordered(list(range(60))):
@@ -196,7 +196,9 @@ def test_tasks_run_in_a_bounded_window_and_a_raising_task_is_a_row(cluster):
     assert all(results[i][0] == 2 * i + 1 for i in results if i != 3)
     assert {pid for i, (_, pid) in results.items() if i != 3} <= set(
         client.run(os.getpid).values())
-    assert max(peak) <= 5 + 1  # the window, and the one being handed over
+    # the window of 5 tasks (of 3 items), the failed task's items run again one per task,
+    # and the task being handed over
+    assert max(peak) <= 5 + 3 + 1
 
 
 def test_closing_the_results_cancels_what_is_outstanding(cluster):
