@@ -48,7 +48,7 @@ def _input(name: str) -> IO[str]:
 
 @click.group()
 def tables() -> None:
-    """Work with the tables gsrwt writes.
+    """Work with the tables gsrwt writes: merge the tables of --shard runs.
 
     \b
     Example:
