@@ -30,9 +30,11 @@ from test_faults import (
     wait_until_gone,
 )
 
-distributed = pytest.importorskip("distributed")
+# Skipped only where the test extra is not installed; CI installs it and must run them.
+distributed = (__import__("distributed") if os.environ.get("CI")
+               else pytest.importorskip("distributed"))
 
-from gsrwt_cli.dask_executor import DaskExecutor, connect  # noqa: E402
+from gsrwt_cli.dask_executor import DaskExecutor  # noqa: E402
 
 SAMPLES = Path(__file__).resolve().parent.parent / "sample_data" / "views"
 
@@ -136,6 +138,7 @@ def test_ctrl_c_cancels_the_tasks_and_writes_the_table_of_what_finished(tmp_path
     assert stray_files(tmp_path) == []
 
 
+@pytest.mark.slow  # waits out the connect timeout
 def test_an_unreachable_scheduler_is_one_line_exit_2(tmp_path):
     import socket
 
@@ -212,14 +215,6 @@ def test_closing_the_results_cancels_what_is_outstanding(cluster):
             str(key).startswith("gsrwt-") for key in client.futures):
         time.sleep(0.05)
     assert not [key for key in client.futures if str(key).startswith("gsrwt-")]
-
-
-def test_connect_names_an_address_that_is_not_one():
-    from gsrwt_cli.dask_executor import SchedulerError
-
-    with pytest.raises(SchedulerError, match="cannot connect"), \
-            connect("tcp://127.0.0.1:1", 1, 0):
-        pass
 
 
 if sys.platform != "linux":  # the kill and signal tests read /proc
