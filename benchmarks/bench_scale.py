@@ -77,7 +77,7 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=2)
     args = parser.parse_args()
     print(f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
-          f"python {platform.python_version()}")
+          f"python {platform.python_version()}, load average {os.getloadavg()[0]:.1f}")
     with tempfile.TemporaryDirectory() as scratch:
         root = Path(scratch)
         big, small, one = root / "big", root / "small", root / "one"
@@ -107,6 +107,7 @@ def main() -> None:
         overhead = ((dask_n - dask_1) - (pool_n - pool_1)) / (args.small - 1)
         print(f"64x48 x {args.small}: pool {pool_n:.2f} s (1 image {pool_1:.2f} s), "
               f"--scheduler local {dask_n:.2f} s (1 image {dask_1:.2f} s)")
+        print(f"load average {os.getloadavg()[0]:.1f} at the end")
         print(f"per-task overhead of the scheduler {overhead * 1000:.2f} ms/image "
               f"(goal < 5); per image: pool {(pool_n - pool_1) / (args.small - 1) * 1000:.2f} "
               f"ms, dask {(dask_n - dask_1) / (args.small - 1) * 1000:.2f} ms")
