@@ -39,19 +39,53 @@ WIDTH, HEIGHT, FOCAL = 4000, 3000, 3200.0
 POSES = [(15, 30), (-20, 10), (30, -15), (-10, -25), (25, 20), (5, 35), (-30, 5), (0, 20)]
 
 
-def make_images(folder: Path, count: int) -> None:
-    """Textured 12-megapixel JPEGs (quality 95) and their sidecar."""
+def make_images(folder: Path, count: int, size: tuple[int, int] = (WIDTH, HEIGHT),
+                focal: float = FOCAL) -> None:
+    """Textured JPEGs (12 megapixels unless ``size`` says, quality 95) and their sidecar."""
+    width, height = size
     rng = np.random.default_rng(0)
-    coarse = rng.uniform(0, 255, (HEIGHT // 8, WIDTH // 8, 3)).astype(np.uint8)
-    base = cv2.resize(coarse, (WIDTH, HEIGHT), interpolation=cv2.INTER_CUBIC)
+    coarse = rng.uniform(0, 255, (height // 8, width // 8, 3)).astype(np.uint8)
+    base = cv2.resize(coarse, (width, height), interpolation=cv2.INTER_CUBIC)
     lines = ["image,pan,tilt,focal"]
     for index in range(count):
         image = np.roll(base, 37 * index, axis=1)
-        name = f"img{index:03d}.jpg"
+        name = f"img{index:04d}.jpg"
         cv2.imwrite(str(folder / name), image, [cv2.IMWRITE_JPEG_QUALITY, 95])
         pan, tilt = POSES[index % len(POSES)]
-        lines.append(f"{name},{pan},{tilt},{FOCAL}")
+        lines.append(f"{name},{pan},{tilt},{focal}")
     (folder / "views.csv").write_text("\n".join(lines) + "\n")
+
+
+#: The small frames of ``--small``: a robot's 640x480 camera.
+SMALL, SMALL_FOCAL = (640, 480), 520.0
+
+
+def small_frames(root: Path, count: int, jobs: int, repeat: int, gsrwt: str) -> None:
+    """``count`` 640x480 frames: gsrwt against the two floors, alternating; the best counts."""
+    folder = root / "small"
+    if len(list(folder.glob("img*.jpg"))) != count:
+        shutil.rmtree(folder, ignore_errors=True)
+        folder.mkdir(parents=True)
+        make_images(folder, count, SMALL, SMALL_FOCAL)
+    me = [sys.executable, __file__, "--folder", str(folder), "--jobs", str(jobs)]
+    commands = {
+        "gsrwt": [gsrwt, "rectify", str(folder), "--sidecar", str(folder / "views.csv"),
+                  "-o", str(root / "small-gsrwt"), "--jobs", str(jobs), "--quiet",
+                  "--overwrite"],
+        "floor": [*me, "--stage", "floor", "--out", str(root / "small-floor")],
+        "best floor": [*me, "--stage", "best-floor", "--out", str(root / "small-best")],
+    }
+    best = {name: min(timed(command) for _ in range(1)) for name, command in commands.items()}
+    for _ in range(repeat - 1):
+        for name, command in commands.items():
+            best[name] = min(best[name], timed(command))
+    print(f"{count} frames of {SMALL[0]}x{SMALL[1]}, {jobs} processes, best of {repeat}:")
+    for name, seconds in best.items():
+        print(f"  {name:10s} {seconds:6.2f} s  {count / seconds:7.1f} images/s  "
+              f"{seconds / count * 1000 * jobs:5.2f} ms of a core per image")
+    print(f"gsrwt time / OpenCV I/O floor time:   {best['gsrwt'] / best['floor']:.2f}"
+          "  (goal <= 1.10)")
+    print(f"gsrwt time / best-codec floor time:   {best['gsrwt'] / best['best floor']:.2f}")
 
 
 #: The wide-angle lens of the ``--lens`` runs (plumb_bob, as a calibration gives it).
@@ -199,6 +233,9 @@ def main() -> None:
     parser.add_argument("--lens", action="store_true",
                         help="Also time the images through a plumb_bob lens (one remap pass), "
                              "with repeated poses (cached maps) and with distinct ones.")
+    parser.add_argument("--small", type=int, metavar="N",
+                        help="Instead: N frames of 640x480 (a robot's camera) against the "
+                             "floors.")
     parser.add_argument("--stage", choices=["floor", "best-floor", "skimage", "memory"],
                         help=argparse.SUPPRESS)
     parser.add_argument("--folder", type=Path, help=argparse.SUPPRESS)
@@ -212,6 +249,12 @@ def main() -> None:
         return
 
     root = args.keep or Path(tempfile.mkdtemp(prefix="gsrwt-bench-"))
+    if args.small:
+        gsrwt = shutil.which("gsrwt") or str(Path(sys.executable).with_name("gsrwt"))
+        small_frames(root, args.small, args.jobs, args.repeat, gsrwt)
+        if not args.keep:
+            shutil.rmtree(root)
+        return
     folder = root / "in"
     if not (folder / "views.csv").exists() or len(_views(folder)) != args.images:
         folder.mkdir(parents=True, exist_ok=True)
