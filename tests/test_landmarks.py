@@ -242,11 +242,15 @@ def test_flat_and_gently_shaded_images_have_no_lines():
     assert hough_lines(ramp) == []
 
 
-def test_short_edges_stay_below_min_votes():
+def test_short_edges_stay_below_min_votes_and_min_length():
     image = np.full((120, 160), 200, np.uint8)
     image[40:70, 60:90] = 40  # a 30x30 square: each edge cell collects fewer than 30 votes
-    assert hough_lines(image) == []  # thesis threshold: 50 votes
-    assert len(hough_lines(image, min_votes=20)) == 4
+    assert hough_lines(image, min_votes=50, min_length=0) == []  # the thesis's 50 votes
+    assert hough_lines(image) == []  # each side is under 28 px from first to last pixel
+    sides = hough_lines(image, min_votes=15, min_length=15)
+    assert len(sides) == 4
+    for line in sides:  # the corners' pixels have diagonal orientations: the sides lose them
+        assert 15 <= line.length <= 28 and line.votes >= 15
 
 
 def test_empty_images_give_no_lines():
