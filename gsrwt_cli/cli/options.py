@@ -135,10 +135,11 @@ def quality_option(func: F) -> F:
                         help="JPEG and WebP quality.")(func)
 
 
-def edge_threshold_option(func: F) -> F:
+def edge_threshold_option(func: F, default: float = DEFAULT_EDGE_THRESHOLD,
+                          text: str = "Sobel magnitude of an edge pixel.") -> F:
     """``--edge-threshold``: the Sobel magnitude of an edge pixel (lines, match)."""
-    return click.option("--edge-threshold", type=float, default=DEFAULT_EDGE_THRESHOLD,
-                        show_default=True, help="Sobel magnitude of an edge pixel.")(func)
+    return click.option("--edge-threshold", type=click.FloatRange(min=0, min_open=True),
+                        default=default, show_default=True, help=text)(func)
 
 
 def images_argument(func: F) -> F:

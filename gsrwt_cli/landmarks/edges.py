@@ -143,8 +143,9 @@ def line_edges(
     (non-maximum suppression) that are connected, through pixels of at least ``low_ratio *
     threshold``, to a pixel of at least ``threshold`` (``cv2.Canny`` with the L2 norm): a
     faint stretch of a white frame on a white wall is kept when the same edge is strong
-    elsewhere, an isolated faint texture pixel is not. ``support``: every pixel of at least
-    the low threshold (not thinned), for sub-pixel fits.
+    elsewhere, an isolated faint texture pixel is not. ``support``: the pixels of at least
+    the low threshold within 2 px of an edge pixel (not thinned), for sub-pixel fits, whose
+    weights (``weight``) are the raw Sobel magnitude of the unsmoothed image.
 
     ``valid``: the frontal pixels that have a source pixel; the gradient is zeroed within
     :data:`FILL_MARGIN` pixels of the others, so the border with the fill gives no edges.
@@ -189,7 +190,9 @@ def line_edges(
     dy = np.clip(np.rint(gradient_y), -limit, limit).astype(np.int16)
     mask = cv2.Canny(dx, dy, low, float(threshold), L2gradient=True) > 0
     mask &= inside.astype(bool)
-    support = (magnitude >= low) & inside.astype(bool)
+    # Support: only near edge pixels (within 2 px), where segments' fits and gaps look.
+    near_edges = cv2.dilate(mask.astype(np.uint8), np.ones((5, 5), np.uint8)).astype(bool)
+    support = (magnitude >= low) & inside.astype(bool) & near_edges
     weight *= inside
     return EdgeMap(magnitude, orientation, mask, support, weight)
 

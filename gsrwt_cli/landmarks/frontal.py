@@ -14,17 +14,25 @@ from numpy.typing import NDArray
 
 from ..geometry import local_stretch
 from ..pixelmap import PixelMap
+from .edges import DEFAULT_LINE_THRESHOLD, EdgeMap, grey_image, line_edges
 
 #: Output pixels between the points where the magnification is computed (then interpolated).
 MAGNIFICATION_STEP = 16
 
+#: Source pixels this close to the image's border count as unseen: real photos often have a
+#: dark rim of a few pixels (OpenCV's chessboard photos do), an edge of no landmark.
+SOURCE_MARGIN = 4
 
-def seen(pixel_map: PixelMap, source_size: tuple[int, int]) -> NDArray[np.bool_]:
-    """The output pixels of ``pixel_map`` that have a source pixel in an image of
-    ``source_size = (width, height)``: one nearest-neighbour warp of a constant image through
-    the same map as the view (so lens, horizon and fill are exactly the view's)."""
+
+def seen(pixel_map: PixelMap, source_size: tuple[int, int],
+         margin: int = SOURCE_MARGIN) -> NDArray[np.bool_]:
+    """The output pixels of ``pixel_map`` whose source pixel lies in an image of
+    ``source_size = (width, height)``, at least ``margin`` pixels inside its border: one
+    nearest-neighbour warp of a constant image through the same map as the view (so lens,
+    horizon and fill are exactly the view's)."""
     width, height = source_size
-    ones = np.full((height, width), 255, np.uint8)
+    ones = np.zeros((height, width), np.uint8)
+    ones[margin:height - margin, margin:width - margin] = 255
     warped = pixel_map.warp(ones, cv2.INTER_NEAREST, (0.0, 0.0, 0.0, 0.0))
     return warped > 0
 
@@ -52,3 +60,19 @@ def magnification(pixel_map: PixelMap) -> NDArray[np.float32]:
     map_x, map_y = np.meshgrid(np.arange(width, dtype=np.float32) / step,
                                np.arange(height, dtype=np.float32) / step)
     return cv2.remap(coarse, map_x, map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+
+
+def frontal_edges(
+    image: np.ndarray,
+    pixel_map: PixelMap | None = None,
+    source_size: tuple[int, int] | None = None,
+    threshold: float = DEFAULT_LINE_THRESHOLD,
+) -> EdgeMap:
+    """The edge stage of ``gsrwt lines`` and ``gsrwt match`` on a frontal view ``image``:
+    :func:`~.edges.line_edges` with the view's :func:`seen` pixels and :func:`magnification`
+    when it was rectified through ``pixel_map`` from an image of ``source_size``."""
+    grey = grey_image(image)
+    if pixel_map is None or source_size is None:
+        return line_edges(grey, threshold)
+    return line_edges(grey, threshold, valid=seen(pixel_map, source_size),
+                      magnification=magnification(pixel_map))

@@ -210,7 +210,8 @@ def hough_lines(
     voters = _Pixels(x, y, theta_bin, edges.magnitude[rows, cols].astype(np.float64),
                      theta_bin_count)
     found = _segments(peak_cells, rho_bin_count, rho_offset, rho_step, theta_step_deg,
-                      voters, support, max(spread, 1), float(max_gap), float(min_length))
+                      voters, support, max(spread, 1), float(max_gap), float(min_length),
+                      max(int(min_votes), 1))
     found = [line for line in found if orientation_allows(line.theta_deg, orientation)]
     found.sort(key=lambda line: -line.length)
     return found if max_lines is None else found[:max_lines]
@@ -225,13 +226,18 @@ class _Pixels:
         self.order = np.argsort(theta_bin, kind="stable")
         self.bin_starts = np.searchsorted(theta_bin[self.order], np.arange(bin_count + 1))
         self.bin_count = bin_count
+        self._near: dict[tuple[int, int], np.ndarray] = {}
 
     def near_bin(self, theta_bin: int, spread_bins: int) -> np.ndarray:
-        """Indices of the pixels in the bins within ``spread_bins`` of ``theta_bin``."""
-        return np.concatenate([
-            self.order[self.bin_starts[b]:self.bin_starts[b + 1]]
-            for b in compatible_bins(theta_bin, spread_bins, self.bin_count)
-        ])
+        """Indices of the pixels in the bins within ``spread_bins`` of ``theta_bin``
+        (kept: many candidate lines share a bin)."""
+        key = (theta_bin, spread_bins)
+        if key not in self._near:
+            self._near[key] = np.concatenate([
+                self.order[self.bin_starts[b]:self.bin_starts[b + 1]]
+                for b in compatible_bins(theta_bin, spread_bins, self.bin_count)
+            ])
+        return self._near[key]
 
 
 def _along_and_across(x: np.ndarray, y: np.ndarray, theta: float, rho: float):
@@ -269,20 +275,20 @@ def _weighted_line_fit(
 def _segments(
     peak_cells: np.ndarray, rho_bin_count: int, rho_offset: int, rho_step: float,
     theta_step_deg: float, voters: _Pixels, support: _Pixels, spread_bins: int,
-    max_gap: float, min_length: float,
+    max_gap: float, min_length: float, min_votes: int = 1,
 ) -> list[Line]:
     """The segments of the Hough cells ``peak_cells`` (strongest first); a loop over cells.
 
     For each cell: its line is fitted through its free voters (edge pixels of the cell's and
     the ``spread_bins`` neighbouring orientation bins within 1.5 px, at least half a rho
     bin, of the line; total least squares weighted by gradient magnitude, three passes, as the
-    cell's line may sit a degree and a pixel off the edge). The voters of the fitted line are
-    sorted along it and cut where consecutive ones are more than ``max_gap`` apart. Each piece
-    long enough is refitted (twice) on the support pixels within 1.5 px of its line and
-    between its ends (a blurred edge is several pixels thick: the weighted fit puts the line
-    where the grey level changes most, a sharp step half-way between its two pixel columns),
-    its ends are its first and last voters projected onto that line, and its voters are
-    taken (no later cell uses them). Each pass is vectorized over the pixels of a few bins.
+    cell's line may sit a degree and a pixel off the edge). The support pixels of the same
+    bins within 1.5 px of the fitted line are sorted along it and cut where consecutive ones
+    are more than ``max_gap`` apart (a thin chain of edge pixels on a faint, noisy edge
+    wanders; the thicker support band around it does not break). Each piece long enough is
+    refitted (:func:`_piece`), and its voters are taken: no later cell uses them; a cell
+    left with fewer than ``min_votes`` free voters near its line is dropped. Each step is
+    vectorized over the pixels of a few bins.
     """
     voter_distance = max(HOUGH_VOTER_DISTANCE, 0.5 * rho_step)
     free = np.ones(voters.x.size, bool)
@@ -304,24 +310,30 @@ def _segments(
                 break
             theta, rho = _weighted_line_fit(near_x[close], near_y[close], near_weight[close],
                                             cell_theta)
-        if np.count_nonzero(close) < 2:
+        if np.count_nonzero(close) < max(2, min_votes):
             continue
-        # Cut where the support along the fitted line has gaps: a wobbly chain of thin
-        # edge pixels on a faint, noisy edge stays inside the thicker support band.
         support_near = support.near_bin(peak_theta_bin, spread_bins)
-        along, across = _along_and_across(support.x[support_near], support.y[support_near],
-                                          theta, rho)
-        along = np.sort(along[np.abs(across) <= voter_distance])
+        support_along, support_across = _along_and_across(
+            support.x[support_near], support.y[support_near], theta, rho)
+        band = np.abs(support_across) <= voter_distance + 2.0  # where refits may look
+        support_near, support_along = support_near[band], support_along[band]
+        along = np.sort(support_along[np.abs(support_across[band]) <= voter_distance])
         if along.size < 2:
             continue
+        voter_along, voter_across = _along_and_across(near_x, near_y, theta, rho)
+        voter_band = np.abs(voter_across) <= PIECE_VOTER_DISTANCE + 2.0
+        nearby, voter_along = nearby[voter_band], voter_along[voter_band]
         cuts = np.flatnonzero(np.diff(along) > max_gap) + 1
         starts = np.concatenate([[0], cuts])
         ends = np.concatenate([cuts, [along.size]]) - 1
         for start, end in zip(starts, ends):
-            if along[end] - along[start] < min_length - 1e-9:
+            first, last = float(along[start]), float(along[end])
+            if last - first < min_length - 1e-9:
                 continue
-            line = _piece(theta, rho, cell_theta, float(along[start]), float(along[end]),
-                          voters, nearby, support, support_near, voter_distance, free)
+            pixels = support_near[(support_along >= first - 2.0) & (support_along <= last + 2.0)]
+            members = nearby[(voter_along >= first - 3.0) & (voter_along <= last + 3.0)]
+            line = _piece(theta, rho, cell_theta, first, last, voters, members, support,
+                          pixels, voter_distance, free)
             if line is not None and line.length >= min_length - 1e-9:
                 lines.append(line)
     return lines
@@ -329,14 +341,20 @@ def _segments(
 
 def _piece(
     theta: float, rho: float, cell_theta: float, first: float, last: float, voters: _Pixels,
-    nearby: np.ndarray, support: _Pixels, support_near: np.ndarray, voter_distance: float,
+    members: np.ndarray, support: _Pixels, pixels: np.ndarray, voter_distance: float,
     free: np.ndarray,
 ) -> Line | None:
-    """One segment between ``first`` and ``last`` along the line: refit (twice) on the
-    support pixels there, ends from the free voters (of ``nearby``) within
-    :data:`PIECE_VOTER_DISTANCE` of the refitted line, which are then taken (marked in
-    ``free``); None if they are fewer than :data:`MIN_FILL` per pixel of its length."""
-    sx, sy, sw = support.x[support_near], support.y[support_near], support.weight[support_near]
+    """One segment between ``first`` and ``last`` along the line ``(theta, rho)``.
+
+    Refitted twice on the support ``pixels`` within ``voter_distance`` of the line and between
+    its ends, weighted by the raw Sobel magnitude (a blurred edge is several pixels thick:
+    the weighted fit puts the line where the grey level changes most, a sharp step half-way
+    between its two pixel columns). Its ends are its first and last free voters (of
+    ``members``) within :data:`PIECE_VOTER_DISTANCE` of the refitted line, projected onto it;
+    they are then taken (marked in ``free``). None if they are fewer than :data:`MIN_FILL`
+    per pixel of its length.
+    """
+    sx, sy, sw = support.x[pixels], support.y[pixels], support.weight[pixels]
     for _ in range(2):
         along, across = _along_and_across(sx, sy, theta, rho)
         inside = (np.abs(across) <= voter_distance) & (along >= first - 0.5) & (
@@ -344,7 +362,7 @@ def _piece(
         if np.count_nonzero(inside) < 2:
             break
         theta, rho = _weighted_line_fit(sx[inside], sy[inside], sw[inside], cell_theta)
-    members = nearby[free[nearby]]
+    members = members[free[members]]
     along, across = _along_and_across(voters.x[members], voters.y[members], theta, rho)
     keep = ((np.abs(across) <= PIECE_VOTER_DISTANCE) & (along >= first - 1.0)
             & (along <= last + 1.0))
