@@ -247,11 +247,14 @@ def test_short_edges_stay_below_min_votes_and_min_length():
     image = np.full((120, 160), 200, np.uint8)
     image[40:70, 60:90] = 40  # a 30x30 square: each edge cell collects fewer than 30 votes
     assert hough_lines(image, min_votes=50, min_length=0) == []  # the thesis's 50 votes
-    assert hough_lines(image) == []  # each side is under 28 px from first to last pixel
+    assert hough_lines(image) == []  # each side is 29 px from first to last pixel
     sides = hough_lines(image, min_votes=15, min_length=15)
     assert len(sides) == 4
-    for line in sides:  # the corners' pixels have diagonal orientations: the sides lose them
-        assert 15 <= line.length <= 28 and line.votes >= 15
+    for line in sides:  # from the first to the last pixel row (column) of the square
+        assert line.length == pytest.approx(29.0, abs=0.5) and line.votes >= 15
+        assert sorted([line.y1, line.y2] if abs(line.x1 - line.x2) < 1 else
+                      [line.x1, line.x2]) == pytest.approx([40, 69] if abs(line.x1 - line.x2)
+                                                           < 1 else [60, 89], abs=0.5)
 
 
 def test_a_line_is_cut_where_its_edge_has_a_gap():
@@ -264,10 +267,8 @@ def test_a_line_is_cut_where_its_edge_has_a_gap():
     for line, (top, bottom) in zip(pieces, ((20, 119), (150, 279))):
         assert line.rho == pytest.approx(-79.5, abs=0.1)
         ends = sorted([line.y1, line.y2])
-        # The ends are the first and last edge pixels: near the corners the (smoothed)
-        # orientation turns diagonal and those pixels do not vote, so the ends lie up to 5 px
-        # inside the true ones.
-        assert top <= ends[0] <= top + 5 and bottom - 5 <= ends[1] <= bottom, ends
+        # The ends are the first and last pixel rows of the edge.
+        assert ends == pytest.approx([top, bottom], abs=0.5)
         assert line.length == pytest.approx(ends[1] - ends[0])
         assert line.contrast > 200  # a 140-level step: well over the threshold
     (whole,) = hough_lines(image, orientation="vertical", max_gap=40)

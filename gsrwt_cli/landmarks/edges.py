@@ -70,6 +70,9 @@ class EdgeMap:
     #: Weights of sub-pixel fits: the raw 3x3 Sobel magnitude of the unsmoothed image (its
     #: profile across an edge is narrow); None: ``magnitude``.
     weight: NDArray[np.float32] | None = None
+    #: The raw 3x3 Sobel ``(gx, gy)`` of the unsmoothed image, shape ``(2, height, width)``,
+    #: where segments' ends are looked for; None if not kept.
+    gradient: NDArray[np.float32] | None = None
 
     @property
     def support_mask(self) -> NDArray[np.bool_]:
@@ -160,6 +163,7 @@ def line_edges(
     gradient_x = cv2.Sobel(grey, cv2.CV_32F, 1, 0, ksize=3)
     gradient_y = cv2.Sobel(grey, cv2.CV_32F, 0, 1, ksize=3)
     weight = cv2.magnitude(gradient_x, gradient_y)
+    raw_gradient = np.stack([gradient_x, gradient_y])
     if smoothing > 0:  # the Sobel of the smoothed image is the smoothed Sobel
         gradient_x = cv2.GaussianBlur(gradient_x, (0, 0), smoothing)
         gradient_y = cv2.GaussianBlur(gradient_y, (0, 0), smoothing)
@@ -194,7 +198,8 @@ def line_edges(
     near_edges = cv2.dilate(mask.astype(np.uint8), np.ones((5, 5), np.uint8)).astype(bool)
     support = (magnitude >= low) & inside.astype(bool) & near_edges
     weight *= inside
-    return EdgeMap(magnitude, orientation, mask, support, weight)
+    raw_gradient *= inside
+    return EdgeMap(magnitude, orientation, mask, support, weight, raw_gradient)
 
 
 def orientation_bin_count(step_deg: float) -> int:

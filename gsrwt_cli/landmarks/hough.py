@@ -33,6 +33,11 @@ DEFAULT_MAX_GAP = 10.0
 #: Segments shorter than this (frontal pixels) are not reported.
 DEFAULT_MIN_LENGTH = 30.0
 
+#: A segment's ends are moved outward, by whole pixels, at most this far, while the raw
+#: gradient across the line keeps at least half its strength and its polarity: the smoothed
+#: orientation of the last few pixels before a corner turns, and they do not vote.
+MAX_END_EXTENSION = 6
+
 #: A segment holds at least this many edge pixels per pixel of its length (a diagonal edge
 #: one pixel thick holds 0.71): a chain of scattered texture pixels is no segment.
 MIN_FILL = 0.5
@@ -211,7 +216,7 @@ def hough_lines(
                      theta_bin_count)
     found = _segments(peak_cells, rho_bin_count, rho_offset, rho_step, theta_step_deg,
                       voters, support, max(spread, 1), float(max_gap), float(min_length),
-                      max(int(min_votes), 1))
+                      max(int(min_votes), 1), edges.gradient)
     found = [line for line in found if orientation_allows(line.theta_deg, orientation)]
     found.sort(key=lambda line: -line.length)
     return found if max_lines is None else found[:max_lines]
@@ -276,6 +281,7 @@ def _segments(
     peak_cells: np.ndarray, rho_bin_count: int, rho_offset: int, rho_step: float,
     theta_step_deg: float, voters: _Pixels, support: _Pixels, spread_bins: int,
     max_gap: float, min_length: float, min_votes: int = 1,
+    gradient: np.ndarray | None = None,
 ) -> list[Line]:
     """The segments of the Hough cells ``peak_cells`` (strongest first); a loop over cells.
 
@@ -333,7 +339,7 @@ def _segments(
             pixels = support_near[(support_along >= first - 2.0) & (support_along <= last + 2.0)]
             members = nearby[(voter_along >= first - 3.0) & (voter_along <= last + 3.0)]
             line = _piece(theta, rho, cell_theta, first, last, voters, members, support,
-                          pixels, voter_distance, free)
+                          pixels, voter_distance, free, gradient)
             if line is not None and line.length >= min_length - 1e-9:
                 lines.append(line)
     return lines
@@ -342,7 +348,7 @@ def _segments(
 def _piece(
     theta: float, rho: float, cell_theta: float, first: float, last: float, voters: _Pixels,
     members: np.ndarray, support: _Pixels, pixels: np.ndarray, voter_distance: float,
-    free: np.ndarray,
+    free: np.ndarray, gradient: np.ndarray | None = None,
 ) -> Line | None:
     """One segment between ``first`` and ``last`` along the line ``(theta, rho)``.
 
@@ -352,7 +358,9 @@ def _piece(
     between its two pixel columns). Its ends are its first and last free voters (of
     ``members``) within :data:`PIECE_VOTER_DISTANCE` of the refitted line, projected onto it;
     they are then taken (marked in ``free``). None if they are fewer than :data:`MIN_FILL`
-    per pixel of its length.
+    per pixel of its length. With the raw ``gradient``, each end then moves outward by whole
+    pixels (at most :data:`MAX_END_EXTENSION`) while the gradient across the line, sampled
+    on it, keeps half the median strength of its voters, with their polarity.
     """
     sx, sy, sw = support.x[pixels], support.y[pixels], support.weight[pixels]
     for _ in range(2):
@@ -372,9 +380,46 @@ def _piece(
     free[members] = False
     first, last = float(along.min()), float(along.max())
     c, s = math.cos(theta), math.sin(theta)
+    if gradient is not None:
+        cols, rows = voters.x[members].astype(np.int64), voters.y[members].astype(np.int64)
+        strength = float(np.median(gradient[0, rows, cols] * c + gradient[1, rows, cols] * s))
+        if strength > 0:
+            before, after = _extensions(gradient, theta, rho, first, last, strength)
+            first, last = first - before, last + after
     return Line(
         rho=float(rho), theta_deg=math.degrees(theta) % 360.0, votes=int(members.size),
         x1=rho * c - first * s, y1=rho * s + first * c,
         x2=rho * c - last * s, y2=rho * s + last * c,
         length=last - first, contrast=float(np.median(voters.weight[members])),
     )
+
+
+def _extensions(gradient: np.ndarray, theta: float, rho: float, first: float, last: float,
+                strength: float) -> tuple[int, int]:
+    """Whole pixels by which a segment's ends ``first`` and ``last`` (along its line) may move
+    outward: how many of the points 1, 2, .. :data:`MAX_END_EXTENSION` px beyond each have a
+    gradient across the line (bilinear in the raw ``gradient``) of at least half
+    ``strength``, counted from the end until the first that has not."""
+    c, s = math.cos(theta), math.sin(theta)
+    step = np.arange(1, MAX_END_EXTENSION + 1, dtype=np.float64)
+    along = np.concatenate([first - step, last + step])
+    x, y = rho * c - along * s, rho * s + along * c
+    sampled = _bilinear(gradient, x, y)  # (2, points)
+    weak = (sampled[0] * c + sampled[1] * s < 0.5 * strength).reshape(2, -1)
+    counts = np.where(weak.any(axis=1), weak.argmax(axis=1), MAX_END_EXTENSION)
+    return int(counts[0]), int(counts[1])
+
+
+def _bilinear(values: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """The planes of ``values`` ``(planes, height, width)`` at points ``(x, y)``,
+    interpolated bilinearly, shape ``(planes, points)``; 0 outside."""
+    height, width = values.shape[1:]
+    inside = (x >= 0) & (x <= width - 1) & (y >= 0) & (y <= height - 1)
+    x, y = np.where(inside, x, 0.0), np.where(inside, y, 0.0)
+    col = np.clip(np.floor(x).astype(np.int64), 0, max(width - 2, 0))
+    row = np.clip(np.floor(y).astype(np.int64), 0, max(height - 2, 0))
+    fx, fy = x - col, y - row
+    right, below = np.minimum(col + 1, width - 1), np.minimum(row + 1, height - 1)
+    top = values[:, row, col] * (1 - fx) + values[:, row, right] * fx
+    bottom = values[:, below, col] * (1 - fx) + values[:, below, right] * fx
+    return np.where(inside, top * (1 - fy) + bottom * fy, 0.0)
