@@ -420,8 +420,8 @@ def estimate_pose(
     points), or None when the focal length is unknown: it is then estimated from two finite
     orthogonal vanishing points (spec section 7), with the principal point
     ``principal_point`` or the image's centre. ``lines``: segments ``(N, 4)`` to use instead
-    of detecting them (tests). ``wall``: ``frontal`` (spec section 7) or ``dominant`` (:func:`world_from_camera_of`).
-    Never raises for an image that cannot tell its pose: the
+    of detecting them (tests). ``wall``: ``frontal`` (spec section 7) or ``dominant``
+    (:func:`world_from_camera_of`). Never raises for an image that cannot tell its pose: the
     result's ``error`` says why (``only 1 of 3 directions found, 14 segments``).
     """
     if wall not in WALL_CHOICES:
