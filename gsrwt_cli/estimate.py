@@ -44,6 +44,8 @@ MIN_DIRECTION_SEGMENTS = 5
 MIN_DIRECTION_FRACTION = 0.04
 #: End-point distance (pixels at 640x480) within which a segment belongs to a direction.
 INLIER_PX = 1.5
+#: Scale of the Cauchy weights of the refinement, as a fraction of the inlier distance.
+CAUCHY_FRACTION = 0.25
 #: Hypotheses of the minimal-sample search, and the segments they are drawn from (the longest).
 HYPOTHESES = 600
 SAMPLED_SEGMENTS = 120
@@ -53,6 +55,10 @@ SCORED_SEGMENTS = 200
 MAX_SEGMENTS = 500
 #: Images are searched for segments at most this many pixels on their long side.
 MAX_DETECTION_SIDE = 1280
+#: Focal lengths (multiples of the long side) at which an unknown camera's frame is searched
+#: first, with fewer hypotheses each.
+FOCAL_GRID = tuple(0.4 * 1.25**k for k in range(10))
+GRID_HYPOTHESES = 300
 #: Focal lengths an image may be found to have, as multiples of its diagonal.
 FOCAL_RANGE = (0.2, 10.0)
 #: Vanishing points further than this many diagonals from the principal point are
@@ -271,22 +277,27 @@ def _labels(normals: np.ndarray, half: np.ndarray, directions: np.ndarray,
 
 
 def _refine(normals: np.ndarray, half: np.ndarray, directions: np.ndarray,
-            inlier_px: float, iterations: int = 8) -> np.ndarray:
+            inlier_px: float, iterations: int = 8,
+            fixed_labels: np.ndarray | None = None) -> np.ndarray:
     """Gauss-Newton on the rotation: residual ``half * n.v_k`` (about the end-point distance
-    in pixels) of each inlier, Cauchy-weighted, the rotation updated as ``exp([w]x) R``."""
+    in pixels) of each inlier, Cauchy-weighted, the rotation updated as ``exp([w]x) R``.
+    Inliers are re-assigned each iteration, unless ``fixed_labels`` gives them."""
     directions = np.linalg.svd(directions)[0] @ np.linalg.svd(directions)[2]
     for iteration in range(iterations):
-        gate = inlier_px * (2.0 if iteration < 2 else 1.0)
-        distance = np.abs(normals @ directions) * half[:, None]
-        labels = np.argmin(distance, axis=1)
-        inliers = distance[np.arange(len(labels)), labels] < gate
+        if fixed_labels is None:
+            gate = inlier_px * (2.0 if iteration < 2 else 1.0)
+            distance = np.abs(normals @ directions) * half[:, None]
+            labels = np.argmin(distance, axis=1)
+            inliers = distance[np.arange(len(labels)), labels] < gate
+        else:
+            labels, inliers = np.maximum(fixed_labels, 0), fixed_labels >= 0
         if inliers.sum() < 3:
             break
         n, k, s = normals[inliers], labels[inliers], half[inliers]
         v = directions[:, k].T  # (M, 3)
         residual = s * np.einsum("ij,ij->i", n, v)
         jacobian = s[:, None] * np.cross(v, n)
-        weight = 1.0 / (1.0 + (residual / (0.5 * inlier_px)) ** 2)
+        weight = 1.0 / (1.0 + (residual / (CAUCHY_FRACTION * inlier_px)) ** 2)
         normal_matrix = (jacobian * weight[:, None]).T @ jacobian
         damping = 1e-6 * np.trace(normal_matrix) + 1e-12
         step = np.linalg.solve(normal_matrix + damping * np.eye(3),
@@ -295,6 +306,62 @@ def _refine(normals: np.ndarray, half: np.ndarray, directions: np.ndarray,
         if np.linalg.norm(step) < 1e-9:
             break
     return directions
+
+
+def _image_cost(lines: np.ndarray, pixel_from_camera: np.ndarray, directions: np.ndarray,
+                labels: np.ndarray, inlier_px: float) -> float:
+    """Cauchy cost of the segments of ``labels``: the distance in pixels of each segment's end
+    point from the line through its midpoint and its direction's vanishing point."""
+    inliers = labels >= 0
+    segments = lines[inliers]
+    points = (pixel_from_camera @ directions[:, labels[inliers]]).T  # homogeneous VPs
+    mid = np.column_stack([(segments[:, :2] + segments[:, 2:]) / 2, np.ones(len(segments))])
+    through = np.cross(mid, points)
+    through /= np.maximum(np.hypot(through[:, 0], through[:, 1]), 1e-300)[:, None]
+    distance = np.abs(through[:, 0] * segments[:, 0] + through[:, 1] * segments[:, 1]
+                      + through[:, 2])
+    return float(np.log1p((distance / (CAUCHY_FRACTION * inlier_px)) ** 2).sum())
+
+
+def polish_focal(ideal: np.ndarray, centre: np.ndarray, focal: float, inlier_px: float,
+                 span: float = 1.4, iterations: int = 14) -> float:
+    """The focal length within ``span`` times ``focal`` at which the segments fit a Manhattan
+    frame best: a golden-section search of the refined Cauchy cost, the inliers held fixed.
+
+    The vanishing-point formula (:func:`focal_from_vanishing_points`) uses two clusters; this
+    weighs every segment of all three, which matters when one vanishing point is far away.
+    """
+    def planes(f: float) -> tuple[np.ndarray, np.ndarray]:
+        camera = Intrinsics(f, f, centre[0], centre[1])
+        return interpretation_planes(ideal, _camera_from_pixel(camera))
+
+    normals, half = planes(focal)
+    frame = fit_manhattan_frame(normals, half, inlier_px)
+    if (frame.support() >= MIN_DIRECTION_SEGMENTS).sum() < 2:
+        return focal
+    start = frame.directions
+
+    def cost(log_focal: float) -> float:
+        f = math.exp(log_focal)
+        normals_f, half_f = planes(f)
+        directions = _refine(normals_f, half_f, start, inlier_px, 4, frame.labels)
+        pixel_from_camera = np.linalg.inv(_camera_from_pixel(Intrinsics(f, f, *centre)))
+        return _image_cost(ideal, pixel_from_camera, directions, frame.labels, inlier_px)
+
+    low, high = math.log(focal / span), math.log(focal * span)
+    ratio = (math.sqrt(5.0) - 1.0) / 2.0
+    a, b = high - ratio * (high - low), low + ratio * (high - low)
+    cost_a, cost_b = cost(a), cost(b)
+    for _ in range(iterations):
+        if cost_a < cost_b:
+            high, b, cost_b = b, a, cost_a
+            a = high - ratio * (high - low)
+            cost_a = cost(a)
+        else:
+            low, a, cost_a = a, b, cost_b
+            b = low + ratio * (high - low)
+            cost_b = cost(b)
+    return math.exp((low + high) / 2.0)
 
 
 # --------------------------------------------------------------------------------------------
@@ -449,34 +516,45 @@ def estimate_pose(
     if principal_point is None:
         principal_point = ((width - 1) / 2.0, (height - 1) / 2.0)
     centre = np.array(principal_point, dtype=np.float64)
-    best: PoseEstimate | None = None
-    for guess in (0.8, 1.2, 0.55):
-        focal, told = guess * max(width, height), False
-        for _ in range(3):
-            trial = Intrinsics(focal, focal, centre[0], centre[1], width=width, height=height)
-            normals, half = interpretation_planes(ideal, _camera_from_pixel(trial))
-            frame = fit_manhattan_frame(normals, half, inlier_px)
-            points = [cluster_vanishing_point(ideal[frame.labels == k], centre, diagonal)
-                      if (frame.labels == k).sum() >= MIN_DIRECTION_SEGMENTS else None
-                      for k in range(3)]
-            found = focal_from_vanishing_points(points, centre, diagonal)
-            if found is None:
-                break
-            told, converged, focal = True, abs(found - focal) < 1e-3 * focal, found
-            if converged:
-                break
-        if not told:
-            continue
-        trial = Intrinsics(focal, focal, centre[0], centre[1], width=width, height=height)
-        result = _estimate_known_focal(detected, ideal, trial, inlier_px, segments, True, wall)
-        if result.ok and (best is None or result.inliers > best.inliers):
-            best = result
-    if best is None:
+    focal = _focal_of(ideal, centre, diagonal, max(width, height), inlier_px)
+    if focal is None:
         return _failure(
             "cannot tell the focal length: no two finite vanishing points of orthogonal "
             f"directions ({segments} segments); give the focal length", detected, segments,
             estimated=True)
-    return best
+    trial = Intrinsics(focal, focal, centre[0], centre[1], width=width, height=height)
+    return _estimate_known_focal(detected, ideal, trial, inlier_px, segments, True, wall)
+
+
+def _focal_of(ideal: np.ndarray, centre: np.ndarray, diagonal: float, side: float,
+              inlier_px: float) -> float | None:
+    """The focal length of an image whose camera is unknown (spec section 7).
+
+    The frame is searched at :data:`FOCAL_GRID` focal lengths (multiples of the long side);
+    at the best, the clusters' vanishing points must include two finite orthogonal ones
+    (``f^2 = -(p1 - c).(p2 - c)``, else None: the image cannot tell), and the better of that
+    and the grid's value is polished by :func:`polish_focal` until it settles.
+    """
+    def fitted(f: float) -> tuple[Frame, float]:
+        normals, half = interpretation_planes(
+            ideal, _camera_from_pixel(Intrinsics(f, f, centre[0], centre[1])))
+        return fit_manhattan_frame(normals, half, inlier_px, hypotheses=GRID_HYPOTHESES), f
+
+    frame, focal = max((fitted(side * factor) for factor in FOCAL_GRID),
+                       key=lambda candidate: candidate[0].score)
+    points = [cluster_vanishing_point(ideal[frame.labels == k], centre, diagonal)
+              if (frame.labels == k).sum() >= MIN_DIRECTION_SEGMENTS else None for k in range(3)]
+    from_points = focal_from_vanishing_points(points, centre, diagonal)
+    if from_points is None:
+        return None
+    if fitted(from_points)[0].score > frame.score:
+        focal = from_points
+    for _ in range(4):  # each polish re-fits the frame (its inliers) at the new focal length
+        polished = polish_focal(ideal, centre, focal, inlier_px)
+        done, focal = abs(math.log(polished / focal)) < 0.005, polished
+        if done:
+            break
+    return focal
 
 
 def _estimate_known_focal(detected: np.ndarray, ideal: np.ndarray, camera: Intrinsics,
