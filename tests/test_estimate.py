@@ -112,10 +112,7 @@ def test_lens_distortion_is_removed_from_the_end_points():
                                   lines=lines)
         without = estimate_pose(BLANK, Intrinsics(500, 500, width=640, height=480), lines=lines)
         worst_with = max(worst_with, *errors(with_lens, truth))
-        if without.ok:
-            worst_without = max(worst_without, *errors(without, truth))
-        else:
-            worst_without = 90.0
+        worst_without = max(worst_without, *errors(without, truth)) if without.ok else 90.0
     assert worst_with < 0.5
     assert worst_without > 1.0
 
