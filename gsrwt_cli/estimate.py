@@ -33,6 +33,7 @@ import numpy as np
 
 from .camera import Intrinsics, Pose, View
 from .framing import lens_distortion
+from .landmarks.edges import grey8
 from .poses import PoseError, pose_from_rotation
 
 #: Segments shorter than this fraction of the image's diagonal are left out (noise, texture).
@@ -117,24 +118,6 @@ class EstimateError(ValueError):
 # --------------------------------------------------------------------------------------------
 
 
-def grey_image(image: np.ndarray) -> np.ndarray:
-    """Any decoded image (grey, BGR, BGRA; 8 or 16 bit, float in 0-1) as 8-bit grey."""
-    image = np.asarray(image)
-    if image.ndim == 3:
-        if image.shape[2] == 1:
-            image = image[:, :, 0]
-        else:
-            code = cv2.COLOR_BGRA2GRAY if image.shape[2] == 4 else cv2.COLOR_BGR2GRAY
-            image = cv2.cvtColor(image[:, :, :4] if image.shape[2] > 4 else image, code)
-    if image.dtype == np.uint8:
-        return image
-    if image.dtype == np.uint16:
-        return (image >> 8).astype(np.uint8)
-    if np.issubdtype(image.dtype, np.floating):
-        return np.clip(np.nan_to_num(image) * 255.0 + 0.5, 0, 255).astype(np.uint8)
-    return cv2.normalize(image, None, 0, 255, cv2.NORM_MINMAX).astype(np.uint8)
-
-
 def detect_segments(image: np.ndarray, min_length: float | None = None) -> np.ndarray:
     """Straight segments by OpenCV's LSD: ``(N, 4)`` ``col1, row1, col2, row2``, longest first.
 
@@ -143,7 +126,7 @@ def detect_segments(image: np.ndarray, min_length: float | None = None) -> np.nd
     (default :data:`MIN_SEGMENT_FRACTION` of the diagonal) are left out; at most
     :data:`MAX_SEGMENTS` are kept.
     """
-    grey = grey_image(image)
+    grey = grey8(np.asarray(image))
     height, width = grey.shape
     if min_length is None:
         min_length = max(8.0, MIN_SEGMENT_FRACTION * math.hypot(width, height))

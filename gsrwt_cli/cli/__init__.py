@@ -15,6 +15,7 @@ import click
 from .. import __version__
 from ..imaging import silence_opencv_logging
 from ..messages import escape_controls, one_line, shorten
+from .estimate import estimate
 from .gaze import gaze, track
 from .landmarks import lines, match
 from .params import params
@@ -130,6 +131,7 @@ def main(ctx: click.Context, debug: bool) -> None:
 
 main.add_command(params)
 main.add_command(rectify)
+main.add_command(estimate)
 main.add_command(render)
 main.add_command(gaze)
 main.add_command(track)
