@@ -38,7 +38,7 @@ from .imaging import (
 )
 from .messages import one_line
 from .outputs import OutsideOutputError, check_inside, remove_stale_temporaries, write_atomic
-from .parameters import Found, NotFound, Problem, resolve_parameters
+from .parameters import Found, NotFound, Origin, Problem, resolve_parameters
 from .records import RecordError, view_from_values
 from .rectify import RectifyInfo, plan_image
 from .report import PARAMS_COLUMNS, params_row
@@ -48,6 +48,8 @@ from .sources import Source
 RECTIFY_COLUMNS = (
     *PARAMS_COLUMNS,
     "focal_source",
+    "pose_source",
+    "confidence",
     "output",
     "out_width",
     "out_height",
@@ -57,6 +59,11 @@ RECTIFY_COLUMNS = (
     "error",
 )
 
+
+#: The ``pose_source`` column of each kind of source.
+POSE_SOURCES = {Origin.SIDECAR: "sidecar", Origin.ADJACENT_YAML: "yaml", Origin.OPTIONS: "options"}
+#: Fields that give a pose (pan/tilt, the GS-RWT's delta/a, rvec, a quaternion).
+POSE_GIVERS = ("pan", "tilt", "delta", "a", "rvec_x", "qw")
 
 # --------------------------------------------------------------------------------------------
 # Jobs: one per image, with its parameters found in the main process
@@ -73,6 +80,9 @@ class Job:
     where: str  # where the parameters came from, for messages
     error: str | None = None  # known before reading the image
     existed: bool = False  # the output existed when the run began
+    #: sidecar, yaml, options, or estimated (from the image: ``rectify --auto``)
+    pose_source: str | None = None
+    estimate: Any = None  # the EstimateOptions of an estimated pose
 
 
 #: A function that words an error for the user, or returns None for the error's own text.
@@ -108,8 +118,12 @@ def plan_jobs(
     sidecar: Sidecar | None,
     fallback: dict[str, Any],
     extension: str | None,
+    auto: Any = None,
 ) -> list[Job]:
     """One job per source; outputs mirror relative paths under ``outdir``.
+
+    ``auto``: the :class:`~gsrwt_cli.estimation.EstimateOptions` of images whose pose no
+    source gives (``rectify --auto``): their pose is estimated from the image.
 
     An output whose directory leads out of ``outdir`` (through a symbolic link) is an error
     of its job, as is an output that another job also claims.
@@ -121,13 +135,20 @@ def plan_jobs(
         if extension is not None:
             relative = relative.with_suffix(extension)
         output = outdir / relative
+        pose_source = None
         match resolve_parameters(source.path, source.relative, sidecar, fallback):
-            case Found(values=values, where=where):
-                error = None
+            case Found(values=values, where=where, origin=origin):
+                error, pose_source = None, POSE_SOURCES[origin]
+                if auto is not None and not any(
+                        values.get(name) not in (None, "") for name in POSE_GIVERS):
+                    pose_source = "estimated"
             case Problem(message=error, where=where):
                 values = None
             case NotFound() as missing:
                 values, where, error = None, "", missing.message
+                if auto is not None:
+                    values, where, error, pose_source = dict(fallback), "options", None, \
+                        "estimated"
         if output in claimed:
             error = f"its output {output} is also the output of {claimed[output]}"
         claimed.setdefault(output, source.path)
@@ -137,7 +158,8 @@ def plan_jobs(
             except OutsideOutputError as problem:
                 error = f"its output {output} {problem}"
         existed = error is None and os.path.lexists(output)
-        jobs.append(Job(source.path, output, values, where, error, existed))
+        jobs.append(Job(source.path, output, values, where, error, existed, pose_source,
+                        auto if pose_source == "estimated" else None))
     return jobs
 
 
@@ -177,11 +199,25 @@ def focal_source(values: Mapping[str, Any], where: str) -> str | None:
     return None
 
 
-def _view(job: Job) -> tuple[View, str]:
-    """The job's view and where its focal length came from (EXIF read here if needed)."""
+def _view(job: Job, estimate: bool = True) -> tuple[View, str, dict[str, Any]]:
+    """The job's view, where its focal length came from (EXIF read here if needed) and its
+    ``pose_source`` and ``confidence`` columns; an estimated pose is estimated here (unless
+    not ``estimate``: then it is an error)."""
     if job.error is not None:
         raise _JobError(job.error)
     assert job.values is not None
+    if job.pose_source == "estimated":
+        if not estimate:
+            raise _JobError("its pose was not estimated")
+        from .estimation import estimated_view_values  # the estimator, only when asked for
+
+        values, found, confidence = estimated_view_values(job.source, job.values, job.where,
+                                                          job.estimate)
+        try:
+            view = view_from_values(values, job.where)
+        except RecordError as error:
+            raise _JobError(str(error)) from None
+        return view, found, {"pose_source": "estimated", "confidence": confidence}
     values, source = dict(job.values), focal_source(job.values, job.where)
     if values.get("focal_mm") not in (None, "") and values.get("width") in (None, ""):
         size = image_file_size(job.source)  # millimetres become pixels with the image's size
@@ -197,7 +233,7 @@ def _view(job: Job) -> tuple[View, str]:
         values["fx"], values["fy"] = found.fx, found.fy
         source = "exif"
     try:
-        return view_from_values(values, job.where), source
+        return view_from_values(values, job.where), source, {"pose_source": job.pose_source}
     except RecordError as error:
         raise _JobError(str(error)) from None
 
@@ -243,8 +279,8 @@ def process_job(job: Job, settings: Settings, scratch: Scratch | None = None) ->
     try:
         with np.errstate(all="ignore"), warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            view, source = _view(job)
-            row.update(params_row(view, str(job.source)), focal_source=source)
+            view, source, pose = _view(job)
+            row.update(params_row(view, str(job.source)), focal_source=source, **pose)
             if job.output.exists() and not settings.overwrite:
                 return record_row(job, settings)
             if not job.source.is_file():
@@ -281,8 +317,8 @@ def record_row(job: Job, settings: Settings, status: str = "skipped") -> dict[st
     row: dict[str, Any] = {"image": str(job.source), "output": str(job.output)}
     try:
         with np.errstate(all="ignore"):
-            view, source = _view(job)
-            row.update(params_row(view, str(job.source)), focal_source=source)
+            view, source, pose = _view(job)
+            row.update(params_row(view, str(job.source)), focal_source=source, **pose)
             size = measure_image_file(job.source, settings.max_input_pixels)
             info = _plan(view, size[0], size[1], settings)
         row.update(_geometry(info), image=str(job.source), status=status)
@@ -302,8 +338,8 @@ def died_row(job: Job, reason: str) -> dict[str, Any]:
     """The row of an image whose worker died while working on it."""
     row: dict[str, Any] = {"image": str(job.source), "output": str(job.output)}
     with contextlib.suppress(Exception), np.errstate(all="ignore"):
-        view, source = _view(job)
-        row.update(params_row(view, str(job.source)), focal_source=source)
+        view, source, pose = _view(job, estimate=False)
+        row.update(params_row(view, str(job.source)), focal_source=source, **pose)
     row.update(status="error", error=reason)
     return row
 

@@ -29,7 +29,7 @@ from .imaging import (
     read_image,
 )
 from .outputs import write_atomic
-from .records import GSRWT_FIELDS, POSE_FIELDS, view_from_values
+from .records import GSRWT_FIELDS, POSE_FIELDS, SENSOR_FIELDS, view_from_values
 
 #: Columns of ``gsrwt estimate`` (a public contract, documented in the README).
 ESTIMATE_COLUMNS = (
@@ -144,6 +144,23 @@ def estimate_row(estimate: PoseEstimate, source: str) -> dict[str, Any]:
         if point is not None:
             row[f"vp_{name}_col"], row[f"vp_{name}_row"] = point
     return row
+
+
+def estimated_view_values(path: Path, values: Mapping[str, Any], where: str,
+                          options: EstimateOptions) -> tuple[dict[str, Any], str, float]:
+    """An image's values with its pose estimated (``rectify --auto``): the values (lens and
+    calibration file kept, the estimate's pose and intrinsics over them), where the focal
+    length came from, and the confidence. Raises :class:`~gsrwt_cli.estimate.EstimateError`
+    when the image cannot tell (or tells too little)."""
+    estimate, camera, source, image = estimate_file(path, values, where, options)
+    height, width = image.shape[:2]
+    del image
+    checked(estimate, options)
+    principal_point = camera_for(path, values, where)[2] if camera is None else None
+    merged = {name: value for name, value in values.items()
+              if name not in (*_POSE_VALUES, *SENSOR_FIELDS, "focal", "fx", "fy")}
+    merged.update(estimated_values(estimate, camera, width, height, principal_point))
+    return merged, source, round(estimate.confidence, 4)
 
 
 # --------------------------------------------------------------------------------------------
