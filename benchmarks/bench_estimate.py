@@ -7,7 +7,7 @@ focal length on one core (OpenCV on one thread), the best of ``--repeat`` runs t
 are angles between directions (spec section 7): estimated vs true vertical and wall normal.
 Then the same images with no focal length (estimated from the vanishing points).
 
-    python benchmarks/bench_estimate.py --images 60 --repeat 3
+    python benchmarks/bench_estimate.py --images 64 --repeat 3
 """
 
 from __future__ import annotations

@@ -38,7 +38,7 @@ from .imaging import (
 )
 from .messages import one_line
 from .outputs import OutsideOutputError, check_inside, remove_stale_temporaries, write_atomic
-from .parameters import Found, NotFound, Origin, Problem, resolve_parameters
+from .parameters import Found, NotFound, Problem, resolve_parameters
 from .records import RecordError, view_from_values
 from .rectify import RectifyInfo, plan_image
 from .report import PARAMS_COLUMNS, params_row
@@ -59,11 +59,6 @@ RECTIFY_COLUMNS = (
     "error",
 )
 
-
-#: The ``pose_source`` column of each kind of source.
-POSE_SOURCES = {Origin.SIDECAR: "sidecar", Origin.ADJACENT_YAML: "yaml", Origin.OPTIONS: "options"}
-#: Fields that give a pose (pan/tilt, the GS-RWT's delta/a, rvec, a quaternion).
-POSE_GIVERS = ("pan", "tilt", "delta", "a", "rvec_x", "qw")
 
 # --------------------------------------------------------------------------------------------
 # Jobs: one per image, with its parameters found in the main process
@@ -136,19 +131,14 @@ def plan_jobs(
             relative = relative.with_suffix(extension)
         output = outdir / relative
         pose_source = None
-        match resolve_parameters(source.path, source.relative, sidecar, fallback):
+        match resolve_parameters(source.path, source.relative, sidecar, fallback,
+                                 estimate=auto is not None):
             case Found(values=values, where=where, origin=origin):
-                error, pose_source = None, POSE_SOURCES[origin]
-                if auto is not None and not any(
-                        values.get(name) not in (None, "") for name in POSE_GIVERS):
-                    pose_source = "estimated"
+                error, pose_source = None, origin.value.replace("adjacent ", "")
             case Problem(message=error, where=where):
                 values = None
             case NotFound() as missing:
                 values, where, error = None, "", missing.message
-                if auto is not None:
-                    values, where, error, pose_source = dict(fallback), "options", None, \
-                        "estimated"
         if output in claimed:
             error = f"its output {output} is also the output of {claimed[output]}"
         claimed.setdefault(output, source.path)
