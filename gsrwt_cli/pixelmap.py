@@ -72,7 +72,7 @@ class LensDistortion:
         return self._pixels(ideal.reshape(-1, 2))
 
     def maps(self, output_from_ideal: np.ndarray, size: tuple[int, int],
-             step: int | None = None):
+             step: int | None = None, reuse: tuple[np.ndarray, np.ndarray] | None = None):
         """Maps (x, y; 32-bit float, which ``cv2.remap`` samples faster than fixed-point maps,
         measured) of every output pixel to its (distorted) input pixel: output -> ideal input
         pixel (the homography's inverse) -> lens.
@@ -80,6 +80,9 @@ class LensDistortion:
         ``cv2.initUndistortRectifyMap`` computes ``K distort((newK R)^-1 o)``; with ``newK = I``
         and ``R = output_from_ideal @ K`` that is the lens applied to ``K^-1 H^-1 o``. OpenCV
         there ignores skew, so a skewed camera's maps are computed point by point instead.
+
+        ``reuse``: maps an earlier call returned for a frame of the same size, whose memory
+        the new maps take over (writing fresh memory costs more than computing them).
         """
         k = self._k
         width, height = size
@@ -100,8 +103,15 @@ class LensDistortion:
             if step == 1:
                 return coarse
             # Views into the resized grid (cv2.remap takes row-strided maps as they are).
-            return tuple(cv2.resize(part, None, fx=step, fy=step, interpolation=cv2.INTER_LINEAR)
-                         [step:step + height, step:step + width] for part in coarse)
+            padded = (grid[1] * step, grid[0] * step)
+            targets = [None, None]
+            if reuse is not None and all(part.base is not None and part.base.shape == padded
+                                         for part in reuse):
+                targets = [part.base for part in reuse]
+            return tuple(cv2.resize(part, None, dst=target, fx=step, fy=step,
+                                    interpolation=cv2.INTER_LINEAR)
+                         [step:step + height, step:step + width]
+                         for part, target in zip(coarse, targets))
         cols, rows = np.meshgrid(np.arange(width, dtype=np.float64),
                                  np.arange(height, dtype=np.float64))
         outputs = np.column_stack([cols.ravel(), rows.ravel()])
@@ -117,31 +127,41 @@ class LensDistortion:
 MAP_STEP = 4
 
 #: Bytes of remap maps a process keeps for poses it may see again (a 12-megapixel frame's
-#: maps take 96 MB, a 640x480 one's 2.5 MB): a robot's small frames keep some 80 poses;
-#: maps over a quarter of this (frames over about 6 megapixels) are rebuilt each time, since
-#: holding a few of them costs more page faults than it saves (measured).
+#: maps take 96 MB, a 640x480 one's 2.5 MB): a robot's small frames keep some 80 poses.
+#: Maps over a quarter of this (frames over about 6 megapixels) are not kept beside others:
+#: only the last frame's, whose memory the next big frame's maps reuse (fresh memory costs
+#: page faults: 39 ms against 6 ms to expand a 12-megapixel frame's grid, measured).
 MAP_CACHE_BYTES = 200 * 2**20
 
 
 class _MapCache:
     """A process's maps by (camera, pose, frame), least recently used first out, within
-    :data:`MAP_CACHE_BYTES`: a pan-tilt unit revisits the same poses thousands of times."""
+    :data:`MAP_CACHE_BYTES`: a pan-tilt unit revisits the same poses thousands of times.
+    Big frames' maps are :attr:`last` only (the memory of one frame's maps, reused)."""
 
     def __init__(self, budget: int) -> None:
         self.budget = budget
         self.entries: OrderedDict[tuple, tuple[np.ndarray, np.ndarray]] = OrderedDict()
+        self.last: tuple[tuple, tuple[np.ndarray, np.ndarray]] | None = None
         self.hits = self.misses = 0
 
     def get(self, lens: LensDistortion, homography: np.ndarray, size: tuple[int, int]):
         key = (lens, homography.tobytes(), size)
+        if self.last is not None and self.last[0] == key:
+            self.hits += 1
+            return self.last[1]
         if key in self.entries:
             self.hits += 1
             self.entries.move_to_end(key)
             return self.entries[key]
         self.misses += 1
+        if size[0] * size[1] * 8 > self.budget // 4:  # 2 float maps
+            reuse = self.last[1] if self.last is not None and self.last[0][2] == size else None
+            self.last = None  # a frame of another size: its memory goes first
+            maps = lens.maps(homography, size, reuse=reuse)
+            self.last = key, maps
+            return maps
         maps = lens.maps(homography, size)
-        if sum(part.nbytes for part in maps) > self.budget // 4:
-            return maps  # too big to keep several: holding it costs more than rebuilding it
         self.entries[key] = maps
         while len(self.entries) > 1 and self._bytes() > self.budget:
             self.entries.popitem(last=False)
@@ -152,6 +172,7 @@ class _MapCache:
 
     def clear(self) -> None:
         self.entries.clear()
+        self.last = None
         self.hits = self.misses = 0
 
 
@@ -201,6 +222,11 @@ class PixelMap:
         return (sources[:, 0].reshape(height, width).astype(np.float32),
                 sources[:, 1].reshape(height, width).astype(np.float32))
 
+    @property
+    def _homography(self) -> np.ndarray:
+        """``output_from_input`` as the 3x3 float64 array OpenCV and the map cache take."""
+        return np.ascontiguousarray(self.output_from_input, dtype=np.float64)
+
     def then(self, output_from_output: Matrix, size: tuple[int, int]) -> PixelMap:
         """This map followed by a homography of the output (a new frame of ``size``)."""
         if self.output_lens is not None:
@@ -234,15 +260,24 @@ class PixelMap:
         grid = np.stack(np.meshgrid(cols, rows), axis=-1).reshape(-1, 2)
         if self.lens is None:
             values = local_stretch(np.linalg.inv(self.output_from_input), grid)
-        else:  # finite differences of the map through the lens
-            here, right, down = (self.to_input(grid + offset)
-                                 for offset in ((0, 0), (0.5, 0), (0, 0.5)))
-            a, c = ((right - here) * 2).T
-            b, d = ((down - here) * 2).T
+            sources = None
+        else:  # finite differences of the warp's own maps (cached: it has just used them)
+            maps = MAP_CACHE.get(self.lens, self._homography, self.size)
+            col, row = grid.T.astype(np.intp)
+            # one pixel right and down (left and up on the last column and row)
+            across = np.where(col + 1 < width, 1, -1) if width > 1 else np.zeros_like(col)
+            along = np.where(row + 1 < height, 1, -1) if height > 1 else np.zeros_like(row)
+
+            def at(rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
+                return np.column_stack([part[rows, cols] for part in maps]).astype(np.float64)
+
+            sources = at(row, col)
+            a, c = ((at(row, col + across) - sources) * across[:, None]).T
+            b, d = ((at(row + along, col) - sources) * along[:, None]).T
             values = largest_singular_value(a, b, c, d)
         values = np.nan_to_num(values, nan=1.0, posinf=1.0)
         if source_size is not None:
-            sources = self.to_input(grid)
+            sources = self.to_input(grid) if sources is None else sources
             w = grid @ np.linalg.inv(self.output_from_input)[2, :2] + np.linalg.inv(
                 self.output_from_input)[2, 2]
             inside = (w > 0) & np.all(np.isfinite(sources), axis=1)
@@ -339,7 +374,7 @@ class PixelMap:
         """One OpenCV pass from pyramid ``level`` of the input (``2^level`` pixels per pixel,
         centres at ``(p + 0.5) / 2^level - 0.5``), or of the part of the input whose first
         pixel is ``offset`` (column, row)."""
-        homography = np.ascontiguousarray(self.output_from_input, dtype=np.float64)
+        homography = self._homography
         factor = 0.5**level
         if self.lens is None:
             if offset != (0, 0):

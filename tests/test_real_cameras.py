@@ -495,3 +495,58 @@ def test_big_frames_lens_maps_interpolated_from_a_grid_err_under_a_hundredth_pix
     inside = (exact_x > 0) & (exact_x < 1999) & (exact_y > 0) & (exact_y < 1499)
     assert inside.mean() > 0.5
     assert np.hypot(grid_x - exact_x, grid_y - exact_y)[inside].max() < 0.01
+
+
+def test_big_frames_maps_reuse_the_last_frames_memory_and_stay_exact():
+    """Maps of frames too big to keep several of are written into the memory of the last
+    frame's maps: each pose's maps are still exactly those of a fresh computation."""
+    from gsrwt_cli.framing import lens_distortion
+    from gsrwt_cli.pixelmap import MAP_CACHE, _MapCache
+    from gsrwt_cli.rectify import plan_image
+
+    lens_model = Lens("plumb_bob", (("k1", -0.2), ("k2", 0.05)))
+    plans = [plan_image(View(pan, 10, 1800, lens=lens_model), 1600, 1200) for pan in (15, 25)]
+    sizes = {plan.size for plan in plans}
+    assert len(sizes) == 1  # the same frame, so the second reuses the first's memory
+    cache = _MapCache(budget=4 * plans[0].size[0] * plans[0].size[1] * 8 - 1)
+    lens = lens_distortion(plans[0].view)
+    first = cache.get(lens, plans[0].homography, plans[0].size)
+    first_copy = [part.copy() for part in first]
+    second = cache.get(lens, plans[1].homography, plans[1].size)
+    assert second[0].base is first[0].base  # the same memory, overwritten
+    assert not np.array_equal(first_copy[0], second[0])
+    fresh = lens.maps(plans[1].homography, plans[1].size)
+    for part, expected in zip(second, fresh):
+        np.testing.assert_array_equal(part, expected)
+    assert cache.get(lens, plans[1].homography, plans[1].size) is second  # the last, again
+    assert (cache.hits, cache.misses, len(cache.entries)) == (1, 2, 0)
+    assert MAP_CACHE is not cache
+
+
+def test_lens_shrink_from_the_maps_matches_the_lens_projection():
+    """The anti-aliasing's shrink through a lens is read off the warp's own maps; it agrees
+    with finite differences of the lens projection (cv2.projectPoints) to 1 %."""
+    from gsrwt_cli.framing import lens_distortion
+    from gsrwt_cli.geometry import largest_singular_value
+    from gsrwt_cli.rectify import plan_image
+
+    plan = plan_image(View(55, 10, 700, lens=Lens("plumb_bob", (("k1", -0.25), ("k2", 0.06)))),
+                      1600, 1200, scale=0.4)
+    pixel_map = plan.pixel_map
+    shrink = pixel_map.shrink(32)
+    width, height = plan.size
+    cols = np.arange(0, width + 31, 32, dtype=np.float64).clip(max=width - 1)
+    rows = np.arange(0, height + 31, 32, dtype=np.float64).clip(max=height - 1)
+    grid = np.stack(np.meshgrid(cols, rows), axis=-1).reshape(-1, 2)
+    lens = lens_distortion(plan.view)
+    ideal = cv2.perspectiveTransform(grid[None], np.linalg.inv(plan.homography))[0]
+    here = lens.distort(ideal)
+    right = lens.distort(cv2.perspectiveTransform(
+        (grid + [0.01, 0])[None], np.linalg.inv(plan.homography))[0])
+    down = lens.distort(cv2.perspectiveTransform(
+        (grid + [0, 0.01])[None], np.linalg.inv(plan.homography))[0])
+    a, c = ((right - here) / 0.01).T
+    b, d = ((down - here) / 0.01).T
+    expected = largest_singular_value(a, b, c, d).reshape(shrink.shape)
+    assert expected.max() > 1.5  # the case shrinks enough to be anti-aliased
+    np.testing.assert_allclose(shrink, expected, rtol=0.01)
