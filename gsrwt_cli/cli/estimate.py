@@ -92,7 +92,7 @@ def estimate(inputs: tuple[str, ...], output: str | None, fmt: str | None, recur
     \b
     Examples:
       gsrwt estimate sample_data/views/door_p20_t-8_f800.jpg --focal 800
-      gsrwt estimate photos -o poses.csv && gsrwt rectify photos --sidecar poses.csv -o out
+      gsrwt estimate sample_data/views --sidecar sample_data/views/views.csv -o poses.csv
     """
     fork_workers = getattr(click.get_current_context().find_root().obj, "fork_workers", False)
     input_pixel_limit = parse_pixel_count(max_input_pixels, "--max-input-pixels")
