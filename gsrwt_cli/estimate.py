@@ -54,6 +54,9 @@ SAMPLED_SEGMENTS = 120
 SCORED_SEGMENTS = 200
 #: At most this many segments (the longest) are fitted.
 MAX_SEGMENTS = 500
+#: LSD's own Gaussian down-scaling (OpenCV's default 0.8): 0.6 finds the long edges in
+#: half the time.
+LSD_SCALE = 0.6
 #: Images are searched for segments at most this many pixels on their long side.
 MAX_DETECTION_SIDE = 1280
 #: Focal lengths (multiples of the long side) at which an unknown camera's frame is searched
@@ -134,7 +137,7 @@ def detect_segments(image: np.ndarray, min_length: float | None = None) -> np.nd
     small = grey if factor == 1.0 else cv2.resize(
         grey, (max(1, round(width * factor)), max(1, round(height * factor))),
         interpolation=cv2.INTER_AREA)
-    detector = cv2.createLineSegmentDetector(cv2.LSD_REFINE_STD)
+    detector = cv2.createLineSegmentDetector(cv2.LSD_REFINE_STD, LSD_SCALE)
     found = detector.detect(small)[0]
     if found is None:
         return np.zeros((0, 4))

@@ -162,13 +162,13 @@ def row_width_ratios(grey: np.ndarray) -> list[float]:
 
 
 def test_panels_along_a_row_are_equally_wide(rectified):
-    """The issue asks for 2 %; measured: 3.3, 0.3, 2.0 and 2.8 % on the four floors with five
-    or more panels (the right half a little wider), against 11 % in the photo."""
+    """The issue asks for 2 %; measured: 2.7, 0.5, 0.3 and 2.3 % on the four floors with five
+    or more panels, against 11 % in the photo."""
     grey, _ = rectified
     ratios = row_width_ratios(grey)
     assert len(ratios) >= 3
-    assert np.median(np.abs(ratios)) <= 0.03
-    assert max(np.abs(ratios)) <= 0.04
+    assert np.median(np.abs(ratios)) <= 0.02
+    assert max(np.abs(ratios)) <= 0.03
 
 
 def test_the_measure_can_fail_on_the_photo_itself():
