@@ -1,8 +1,32 @@
 """gsrwt: canonical frontal views of flat surfaces from pan-tilt camera images (GS-RWT)."""
 
-from .camera import View, ViewError
-from .geometry import GsrwtParameters, gsrwt_parameters
+from __future__ import annotations
+
+import importlib
+from typing import Any
 
 __version__ = "0.1.0"
 
-__all__ = ["GsrwtParameters", "View", "ViewError", "__version__", "gsrwt_parameters"]
+#: The package's API, each name imported from its module when first used: ``gsrwt --version``
+#: and every command import only what they need (numpy and OpenCV take most of a start-up).
+_API = {
+    "GsrwtParameters": "geometry",
+    "View": "camera",
+    "ViewError": "camera",
+    "gsrwt_parameters": "geometry",
+}
+
+__all__ = [*sorted(_API), "__version__"]
+
+
+def __getattr__(name: str) -> Any:
+    """PEP 562: the API names of :data:`_API`, imported on first use."""
+    if name not in _API:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f".{_API[name]}", __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *_API})

@@ -19,6 +19,7 @@ the thesis gives them.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cached_property
 
@@ -433,3 +434,50 @@ def pan_tilt_from_gsrwt(delta_deg: float, shift: float, focal: float) -> tuple[f
     pan = math.asin(math.sin(theta) * math.sin(delta))
     tilt = math.atan2(math.sin(theta) * math.cos(delta), math.cos(theta))
     return math.degrees(pan), math.degrees(tilt)
+
+
+def _elementwise(function: Callable[[float, float], float], first: NDArray[np.float64],
+                 second: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``function`` (of :mod:`math`) of each pair: numpy's own ``arctan2`` and ``hypot`` differ
+    from the C library's in the last bit for some 5 % of arguments, and these arrays must be
+    exactly what the per-view properties give."""
+    return np.fromiter(map(function, first.tolist(), second.tolist()), dtype=np.float64,
+                       count=first.size).reshape(first.shape)
+
+
+def parameter_arrays(pan_deg: ArrayLike, tilt_deg: ArrayLike,
+                     focal: ArrayLike) -> dict[str, NDArray[np.float64]]:
+    """:class:`GsrwtParameters` of many poses at once (Sec. 4.5), bit for bit as its properties
+    compute them: ``theta_deg``, ``delta_deg``, ``gamma_deg``, ``shift`` (``a``, Eq. 4.16;
+    ``inf`` when frontal), ``foreshortening`` (Eq. 4.15), the vanishing point ``vp_x, vp_y``
+    (image frame, ``inf`` when frontal), the vanishing line ``line_a, line_b, line_c``
+    (Eq. 4.28-4.30) and ``frontal``. The poses must be valid (``|pan|, |tilt| < 90``,
+    ``focal > 0``): nothing is checked here.
+    """
+    pan, tilt = np.asarray(pan_deg, dtype=np.float64), np.asarray(tilt_deg, dtype=np.float64)
+    focal = np.asarray(focal, dtype=np.float64)
+    alpha, beta = np.radians(pan), np.radians(tilt)
+    ca, sa, cb, sb = np.cos(alpha), np.sin(alpha), np.cos(beta), np.sin(beta)
+    frontal = (np.abs(pan) <= FRONTAL_TOLERANCE_DEG) & (np.abs(tilt) <= FRONTAL_TOLERANCE_DEG)
+    foreshortening = ca * cb
+    sin_theta = np.sqrt(sa * sa + ca * ca * sb * sb)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        shift = np.where(frontal, np.inf, focal * foreshortening / sin_theta)
+        delta_deg = np.where(frontal, 0.0, np.degrees(_elementwise(math.atan2, sa, ca * sb)))
+        delta = np.radians(delta_deg)
+        vp_x = np.where(frontal, np.inf, shift * np.cos(delta))
+        vp_y = np.where(frontal, np.inf, shift * -np.sin(delta))
+    return {
+        "theta_deg": np.degrees(_elementwise(math.atan2, sin_theta, foreshortening)),
+        "delta_deg": delta_deg,
+        "gamma_deg": np.where(frontal, 0.0,
+                              np.degrees(_elementwise(math.atan2, -sa * cb, sb))),
+        "shift": shift,
+        "foreshortening": foreshortening,
+        "vp_x": vp_x,
+        "vp_y": vp_y,
+        "line_a": np.where(frontal, 0.0, -ca * sb),
+        "line_b": np.where(frontal, 0.0, sa),
+        "line_c": np.where(frontal, 1.0, focal * ca * cb),
+        "frontal": frontal,
+    }

@@ -17,10 +17,13 @@ from collections.abc import Mapping
 from functools import lru_cache
 from typing import Any
 
-from .calibration import CalibrationError, load_camera
 from .camera import (
+    DISTANCE_RANGE,
     LENS_FIELDS,
     LENS_MODELS,
+    MAX_FOCAL_PX,
+    MAX_PRINCIPAL_POINT_PX,
+    MAX_SIDE_PX,
     VIEW_FIELDS,
     Intrinsics,
     Lens,
@@ -112,6 +115,54 @@ def _number(where: str, name: str, raw: Any) -> float:
     return value
 
 
+#: The fields of a record of a square-pixel pinhole with no roll, the common case that
+#: :func:`simple_pinhole_numbers` reads for tables of many views computed together.
+SIMPLE_PINHOLE_FIELDS = frozenset({"pan", "tilt", "focal", "cx", "cy", "width", "height",
+                                   "distance"})
+
+
+def simple_pinhole_numbers(values: Mapping[str, Any], where: str) -> tuple[float, ...] | None:
+    """``(pan, tilt, focal, cx, cy, width, height)`` of a record that gives only
+    :data:`SIMPLE_PINHOLE_FIELDS`, each well inside what :func:`view_from_values` accepts
+    (``nan`` for an unknown principal point or size); None for any other record, whose view
+    (or error) :func:`view_from_values` gives. The view's own last check (the horizon at
+    least :data:`~gsrwt_cli.camera.MIN_HORIZON_OFFSET_PX` from the principal point) is the
+    caller's."""
+    given = {name: raw for name, raw in values.items() if raw is not None and raw != ""}
+    if not given.keys() <= SIMPLE_PINHOLE_FIELDS or not {"pan", "tilt", "focal"} <= given.keys():
+        return None
+    number = {}
+    for name, raw in given.items():
+        try:
+            # ASCII without underscores: what float() then reads is what _number reads,
+            # or not finite (refused below); any other text goes the long way.
+            if type(raw) is str and raw.isascii() and "_" not in raw:
+                number[name] = float(raw)
+            else:
+                number[name] = _number(where, name, raw)
+        except (ValueError, RecordError):
+            return None
+    if not all(math.isfinite(value) for value in number.values()):
+        return None
+    pan, tilt, focal = number["pan"], number["tilt"], number["focal"]
+    if not (abs(pan) < 90 and abs(tilt) < 90 and 0 < focal < MAX_FOCAL_PX):
+        return None
+    if not DISTANCE_RANGE[0] < number.get("distance", 1.0) < DISTANCE_RANGE[1]:
+        return None
+    size = number.get("width"), number.get("height")
+    if any(side is not None and not (0 < side <= MAX_SIDE_PX and side == int(side))
+           for side in size):
+        return None
+    centre = number.get("cx"), number.get("cy")
+    if (centre[0] is None) != (centre[1] is None) or any(
+            value is not None and abs(value) >= MAX_PRINCIPAL_POINT_PX for value in centre):
+        return None
+    if centre[0] is None and None not in size:
+        centre = ((int(size[0]) - 1) / 2.0, (int(size[1]) - 1) / 2.0)  # as Intrinsics does
+    return (pan, tilt, focal, *(math.nan if value is None else value for value in centre),
+            *(math.nan if side is None else side for side in size))
+
+
 def view_from_values(values: Mapping[str, Any], where: str) -> View:
     """Build a :class:`View` from raw values (numbers or numeric strings), naming what is wrong.
 
@@ -151,6 +202,8 @@ def view_from_values(values: Mapping[str, Any], where: str) -> View:
     try:
         lens = _lens_from_values(values, numbers_given)
         if camera:
+            from .calibration import CalibrationError  # OpenCV's FileStorage: when needed
+
             try:
                 base = load_camera_file(str(camera))
             except CalibrationError as error:
@@ -234,6 +287,8 @@ def _pose_from_rotation_fields(where: str, numbers: dict[str, float]) -> None:
 def load_camera_file(path: str) -> Intrinsics:
     """A calibration file's intrinsics (:func:`~gsrwt_cli.calibration.load_camera`), read once
     per process; raises :class:`~gsrwt_cli.calibration.CalibrationError`."""
+    from .calibration import load_camera
+
     return load_camera(path)
 
 

@@ -26,17 +26,14 @@ from __future__ import annotations
 
 import csv
 import io
-from collections.abc import Mapping
+from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path, PurePosixPath
 from typing import Any
 
-import yaml
-
 from .camera import VIEW_FIELDS, View
 from .messages import escape_controls, one_line, quote
 from .records import SIDECAR_FIELDS, merge_values, view_from_values
-from .safe_yaml import YamlInputError, load_yaml
 
 
 class SidecarError(ValueError):
@@ -144,9 +141,8 @@ def read_sidecar_text(path: Path) -> str:
         raise SidecarError(f"{name}: cannot read ({error.strerror})") from None
 
 
-def load_sidecar(path: str | Path) -> Sidecar:
-    """Read a CSV, TSV or YAML sidecar; raises :class:`SidecarError` naming the file."""
-    path = Path(path)
+def _sidecar_suffix(path: Path) -> str:
+    """The file type of a sidecar (``.csv``, ``.tsv``, ``.txt``, ``.yaml``, ``.yml``)."""
     suffix = path.suffix.lower()
     if suffix not in (".yaml", ".yml", ".csv", ".tsv", ".txt"):
         _check_is_file(path)  # a missing file is reported as such first
@@ -154,16 +150,50 @@ def load_sidecar(path: str | Path) -> Sidecar:
             f"{display_path(path)}: unknown sidecar type {quote(suffix)} "
             "(use .csv, .tsv or .yaml)"
         )
+    return suffix
+
+
+def load_sidecar(path: str | Path) -> Sidecar:
+    """Read a CSV, TSV or YAML sidecar; raises :class:`SidecarError` naming the file."""
+    path = Path(path)
+    suffix = _sidecar_suffix(path)
     text = read_sidecar_text(path)
     if suffix in (".yaml", ".yml"):
         return sidecar_from_yaml(path, parse_yaml(path, text))
-    return _checked_sidecar(
-        path, _csv_records(path, text, delimiter="\t" if suffix == ".tsv" else ",")
-    )
+    records = _csv_records(path, io.StringIO(text, newline=""),
+                           delimiter="\t" if suffix == ".tsv" else ",")
+    return Sidecar(path, list(_without_duplicates(records)))
+
+
+def iter_sidecar_records(path: str | Path) -> Iterator[Record]:
+    """The records of a sidecar as :func:`load_sidecar` reads them, one at a time: a CSV or
+    TSV file is read as the records are taken (a YAML file at once), in memory that does not
+    grow with the file. Raises :class:`SidecarError`, possibly after some records, when the
+    file turns out bad. An image given twice is two records here (nothing is looked up by
+    image; :func:`load_sidecar`, for lookups, refuses it)."""
+    path = Path(path)
+    suffix = _sidecar_suffix(path)
+    if suffix in (".yaml", ".yml"):
+        yield from load_sidecar(path).records
+        return
+    _check_is_file(path)
+    name = display_path(path)
+    try:
+        with path.open(encoding="utf-8-sig", newline="") as stream:
+            yield from _csv_records(path, stream, delimiter="\t" if suffix == ".tsv" else ",")
+    except UnicodeDecodeError as error:
+        raise SidecarError(f"{name}: not UTF-8 text ({error.reason})") from None
+    except OSError as error:
+        raise SidecarError(f"{name}: cannot read ({error.strerror})") from None
 
 
 def _checked_sidecar(path: Path, records: list[Record]) -> Sidecar:
     """The sidecar of ``records``; an image given twice is an error naming both places."""
+    return Sidecar(path, list(_without_duplicates(records)))
+
+
+def _without_duplicates(records: Iterable[Record]) -> Iterator[Record]:
+    """``records``, checked as they pass: an image given twice is an error naming both places."""
     seen: dict[str, str] = {}
     for record in records:
         key = _normalize(record.image)
@@ -172,13 +202,14 @@ def _checked_sidecar(path: Path, records: list[Record]) -> Sidecar:
                 f"{record.where}: image {quote(record.image)} is already in {seen[key]}"
             )
         seen[key] = record.where
-    return Sidecar(path, records)
+        yield record
 
 
-def _csv_records(path: Path, text: str, delimiter: str) -> list[Record]:
-    """Records of a CSV/TSV text; ``line N`` is where the row starts, quoted newlines counted."""
+def _csv_records(path: Path, lines: Iterable[str], delimiter: str) -> Iterator[Record]:
+    """Records of CSV/TSV text lines; ``line N`` is where the row starts, quoted newlines
+    counted."""
     name = display_path(path)
-    reader = csv.reader(io.StringIO(text, newline=""), delimiter=delimiter)
+    reader = csv.reader(lines, delimiter=delimiter)
     try:
         header = next(reader, None)
         if header is None or not any(cell.strip() for cell in header):
@@ -196,7 +227,6 @@ def _csv_records(path: Path, text: str, delimiter: str) -> list[Record]:
                     f"(columns {first_seen[column]} and {number})"
                 )
             first_seen.setdefault(column, number)
-        records = []
         row_start = reader.line_num + 1
         for cells in reader:
             line_number, row_start = row_start, reader.line_num + 1
@@ -212,13 +242,11 @@ def _csv_records(path: Path, text: str, delimiter: str) -> list[Record]:
             if not image:
                 raise SidecarError(f"{where}, field 'image': empty")
             values = {k: v for k, v in row.items() if k in SIDECAR_FIELDS}
-            records.append(Record(image=image, values=_with_camera_path(path, values),
-                                  where=where))
+            yield Record(image=image, values=_with_camera_path(path, values), where=where)
     except csv.Error as error:
         raise SidecarError(
             f"{name} line {reader.line_num}: {one_line(str(error), 200)}"
         ) from None
-    return records
 
 
 def parse_yaml(path: Path, text: str) -> Any:
@@ -226,6 +254,8 @@ def parse_yaml(path: Path, text: str) -> Any:
 
     Raises :class:`SidecarError` naming the file and, when known, the line.
     """
+    from .safe_yaml import YamlInputError, load_yaml  # PyYAML: only for YAML files
+
     try:
         return load_yaml(text)
     except YamlInputError as error:
@@ -313,6 +343,8 @@ def format_sidecar(path: str | Path, rows: list[Mapping[str, Any]]) -> str:
             str(row["image"]): {c: row[c] for c in columns if row.get(c) is not None}
             for row in rows
         }
+        import yaml
+
         return yaml.safe_dump(mapping, sort_keys=False, allow_unicode=True)
     if suffix not in (".csv", ".tsv"):
         raise SidecarError(f"{path}: a sidecar must end in .csv, .tsv or .yaml")

@@ -35,6 +35,20 @@ def _json_value(value: Any) -> Any:
     return value
 
 
+def _text_cells(values: list[Any], decimals: int) -> list[str]:
+    """:func:`_text_value` of each value (finite floats, most cells, the short way)."""
+    if decimals <= 0:
+        return [_text_value(value, decimals) for value in values]
+    spec, finite, cells = f".{decimals}f", math.isfinite, []
+    for value in values:
+        if type(value) is float and finite(value):
+            text = format(value, spec).rstrip("0").rstrip(".")
+            cells.append("0" if text == "-0" else text)
+        else:
+            cells.append(_text_value(value, decimals))
+    return cells
+
+
 def _text_value(value: Any, decimals: int) -> str:
     if value is None:
         return ""
@@ -51,14 +65,20 @@ def _text_value(value: Any, decimals: int) -> str:
 
 
 class TableWriter:
-    """Write rows with a fixed list of columns to a text stream in one of :data:`FORMATS`."""
+    """Write rows with a fixed list of columns to a text stream in one of :data:`FORMATS`.
 
-    def __init__(self, stream: IO[str], columns: Sequence[str], fmt: str) -> None:
+    Each row is flushed as it is written (a slow batch shows its progress), unless
+    ``flush_rows`` is False (a fast producer: the stream's buffer then goes out as it fills).
+    """
+
+    def __init__(self, stream: IO[str], columns: Sequence[str], fmt: str,
+                 flush_rows: bool = True) -> None:
         if fmt not in FORMATS:
             raise ValueError(f"unknown table format {fmt!r}; choose one of {', '.join(FORMATS)}")
         self.stream = stream
         self.columns = list(columns)
         self.fmt = fmt
+        self.flush_rows = flush_rows
         self._rows_written = 0
         self._buffer: list[list[str]] = []
         self._csv = None
@@ -85,11 +105,23 @@ class TableWriter:
         else:
             self._buffer.append([_text_value(v, HUMAN_DECIMALS) for v in values])
         self._rows_written += 1
-        self.stream.flush()
+        if self.flush_rows:
+            self.stream.flush()
 
     def write_rows(self, rows: Iterable[Mapping[str, Any]]) -> None:
-        for row in rows:
-            self.write_row(row)
+        """Write many rows: in csv and tsv formatted a column at a time (as :meth:`write_row`
+        would, faster), flushed once."""
+        if self._csv is None:
+            for row in rows:
+                self.write_row(row)
+            return
+        rows = list(rows)
+        cells = [_text_cells([row.get(column) for row in rows], MACHINE_DECIMALS)
+                 for column in self.columns]
+        self._csv.writerows(zip(*cells))
+        self._rows_written += len(rows)
+        if self.flush_rows:
+            self.stream.flush()
 
     def close(self) -> None:
         """Finish the table (close the JSON array, lay out the aligned formats)."""

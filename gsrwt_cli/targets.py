@@ -13,16 +13,17 @@ from __future__ import annotations
 import os
 from collections.abc import Iterable
 from pathlib import Path, PurePosixPath
+from typing import TYPE_CHECKING
 
-import numpy as np
-
-from .imaging import encode_image
 from .outputs import (
     OutsideOutputError,
     check_inside,
     remove_stale_temporaries,
     write_atomic,
 )
+
+if TYPE_CHECKING:
+    import numpy as np
 
 
 class TargetError(ValueError):
@@ -151,4 +152,6 @@ class Drawings:
 
     def save(self, target: Path, picture: np.ndarray) -> None:
         """Write the picture whole, inside the directory (or raise OSError, ValueError)."""
+        from .imaging import encode_image
+
         write_atomic(target, encode_image(picture, ".png"), root=self.directory)

@@ -76,8 +76,8 @@ def gsrwt_paths(words: list[str]) -> tuple[list[str], list[str]]:
     assert words[0] == "gsrwt"
     command: click.Command = main
     arguments = words[1:]
-    if arguments and arguments[0] in main.commands:
-        command, arguments = main.commands[arguments[0]], arguments[1:]
+    if arguments and arguments[0] in main.list_commands(None):
+        command, arguments = main.get_command(None, arguments[0]), arguments[1:]
     context = command.make_context(command.name, list(arguments), resilient_parsing=True)
     reads: list[str] = []
     writes: list[str] = []
@@ -109,7 +109,7 @@ def example_paths(example: str) -> tuple[list[str], list[str]]:
     return reads, writes
 
 
-COMMANDS = [None, *sorted(main.commands)]
+COMMANDS = [None, *main.list_commands(None)]
 
 
 def command_id(command: str | None) -> str:

@@ -169,7 +169,7 @@ def test_bad_rows_name_file_row_and_field(tmp_path, gsrwt, row, where, what):
     sidecar.write_text("image,pan,tilt,focal\n" + row + "\n")
     result = gsrwt("params", "--sidecar", str(sidecar))
     assert result.returncode == 2
-    assert result.stdout == ""
+    assert result.stdout == ",".join(PARAMS_COLUMNS) + "\n"  # the header, no row
     lines = result.stderr.splitlines()
     assert len(lines) == 1, result.stderr
     assert lines[0].startswith(f"Error: {sidecar} {where}")
@@ -180,9 +180,10 @@ def test_bad_rows_name_file_row_and_field(tmp_path, gsrwt, row, where, what):
 def test_every_bad_row_is_reported(tmp_path):
     sidecar = tmp_path / "views.csv"
     sidecar.write_text("image,pan,tilt,focal\na,15,95,280\nb,15,30,280\nc,15,30,-3\n")
-    result = CliRunner().invoke(main, ["params", "--sidecar", str(sidecar)])
+    result = CliRunner().invoke(main, ["params", "--sidecar", str(sidecar), "-f", "csv"])
     assert result.exit_code == 2
-    lines = result.output.splitlines()
+    assert [row["image"] for row in csv.DictReader(io.StringIO(result.stdout))] == ["b"]
+    lines = result.stderr.splitlines()
     assert lines == [
         f"Error: {sidecar} line 2, field 'tilt': tilt must be strictly between -90 and 90 "
         "degrees (the camera cannot see the wall otherwise), got 95",
@@ -199,8 +200,6 @@ def test_every_bad_row_is_reported(tmp_path):
         ("views.yaml", "a.jpg: [1, 2\n", "views.yaml line 2"),
         ("views.yaml", "- {image: a.jpg, pan: 1, tilt: 2, focal: x}\n",
          "views.yaml record 1, field 'focal': not a number"),
-        ("views.csv", "image,pan,tilt,focal\na,1,2,280\na,3,4,280\n",
-         "views.csv line 3: image 'a' is already in"),
         ("views.txt.gz", "x", "unknown sidecar type"),
     ],
 )
@@ -231,3 +230,81 @@ def test_bad_options(gsrwt, args, message):
     assert result.returncode == 2
     assert message in result.stderr
     assert "Traceback" not in result.stderr
+
+
+def test_rows_stream_out_around_a_bad_row(tmp_path, gsrwt):
+    """Rows are printed as they are computed: the good rows before and after a bad one are
+    out, the bad one is reported naming its line, and the exit status says the input was bad."""
+    sidecar = tmp_path / "views.csv"
+    sidecar.write_text("image,pan,tilt,focal\na,15,30,280\nb,15,95,280\nc,-20,10,400\n")
+    result = gsrwt("params", "--sidecar", str(sidecar), "-f", "csv")
+    assert result.returncode == 2
+    rows = list(csv.DictReader(io.StringIO(result.stdout)))
+    assert [row["image"] for row in rows] == ["a", "c"]
+    expected = gsrwt("params", "--pan", "-20", "--tilt", "10", "--focal", "400", "-f", "csv")
+    assert rows[1] == {**list(csv.DictReader(io.StringIO(expected.stdout)))[0], "image": "c"}
+    (line,) = result.stderr.splitlines()
+    assert line.startswith(f"Error: {sidecar} line 3, field 'tilt'")
+
+
+def test_an_image_twice_is_two_rows_for_params_but_refused_by_rectify(tmp_path, gsrwt):
+    """params looks nothing up by image, so it streams a sidecar without remembering names
+    (memory flat in the rows); rectify, which looks images up, refuses the ambiguity."""
+    sidecar = tmp_path / "views.csv"
+    sidecar.write_text("image,pan,tilt,focal\na.png,1,2,280\na.png,3,4,280\n")
+    result = gsrwt("params", "--sidecar", str(sidecar), "-f", "csv")
+    assert result.returncode == 0
+    assert [row["pan_deg"] for row in csv.DictReader(io.StringIO(result.stdout))] == ["1", "3"]
+    refused = gsrwt("rectify", str(tmp_path), "--sidecar", str(sidecar), "-o",
+                    str(tmp_path / "out"))
+    assert refused.returncode == 2
+    assert "line 3: image 'a.png' is already in" in refused.stderr
+
+
+def _random_record(rng, index: int) -> tuple[str, dict[str, str], str]:
+    """A sidecar record of a random kind: plain, with size or principal point, frontal,
+    invalid, near the horizon limit, rolled (the long way)."""
+    values = {"pan": f"{rng.uniform(-89.99, 89.99):.3f}",
+              "tilt": f"{rng.uniform(-89.99, 89.99):.3f}", "focal": f"{rng.uniform(1, 3000):.2f}"}
+    kind = rng.randrange(10)
+    extra = [
+        {"width": str(rng.randint(1, 5000)), "height": str(rng.randint(1, 5000))},
+        {"cx": f"{rng.uniform(-100, 1000):.1f}", "cy": f"{rng.uniform(-100, 1000):.1f}"},
+        {"cx": "10", "cy": "20", "width": "30", "height": "40"},
+        {"pan": "0", "tilt": "0", "width": "640", "height": "480"},
+        {"pan": "0", "tilt": "-0"},
+        {"tilt": "95"},
+        {"width": "64.5", "height": "3"},
+        {"pan": "89.99999999", "tilt": "89.9999999", "focal": "1"},
+        {"width": "640", "cx": "nan", "cy": "1"},
+        {"roll": "5", "width": "640", "height": "480"},
+    ][kind]
+    return f"i{index}.png", {**values, **extra}, f"views.csv line {index + 2}"
+
+
+def test_views_computed_together_are_exactly_those_of_their_views():
+    """``params --sidecar`` computes square-pixel pinholes many at once: every row, and every
+    error, is exactly (float for float) what the record's own view gives."""
+    import math
+    import random
+
+    from gsrwt_cli.records import RecordError, view_from_values
+    from gsrwt_cli.report import params_row, params_rows
+
+    rng = random.Random(7)
+    records = [_random_record(rng, index) for index in range(20_000)]
+    fast = 0
+    for (image, values, where), row in zip(records, params_rows(records)):
+        try:
+            expected = params_row(view_from_values(values, where), image)
+        except RecordError as error:
+            assert isinstance(row, RecordError) and str(row) == str(error)
+            continue
+        assert isinstance(row, dict) and row.keys() == expected.keys(), (values, row)
+        for name, value in expected.items():
+            got = row[name]
+            assert type(got) is type(value), (name, values)
+            assert got == value or (isinstance(value, float) and math.isnan(value)
+                                    and math.isnan(got)), (name, values, got, value)
+        fast += "roll" not in values
+    assert fast > 8_000  # valid rows without roll: computed together

@@ -34,7 +34,7 @@ from gsrwt_cli.camera import (
 )
 from gsrwt_cli.framing import output_from_input
 from gsrwt_cli.records import RecordError, view_from_values
-from gsrwt_cli.report import params_row
+from gsrwt_cli.report import PARAMS_COLUMNS, params_row
 from gsrwt_cli.safe_yaml import MAX_DEPTH, YamlInputError, load_yaml
 from gsrwt_cli.sidecar import SidecarError, load_sidecar
 
@@ -73,11 +73,19 @@ def params_cli(path: Path):
     return result.returncode, lines, result.stdout
 
 
-def refused_by_cli(path: Path, *expected: str) -> list[str]:
-    """Run the CLI on a bad sidecar: exit 2, nothing on stdout, lines naming file and place."""
+PARAMS_HEADER = ",".join(PARAMS_COLUMNS) + "\n"
+
+
+def refused_by_cli(path: Path, *expected: str, good: tuple[str, ...] = ()) -> list[str]:
+    """Run the CLI on a bad sidecar: exit 2, on stdout the rows of the ``good`` images only
+    (rows are printed as they are computed; the header at most if none), lines naming file
+    and place."""
     code, lines, stdout = params_cli(path)
     assert code == 2, lines
-    assert stdout == ""
+    if not good:
+        assert stdout in ("", PARAMS_HEADER)
+    else:
+        assert tuple(row["image"] for row in csv.DictReader(io.StringIO(stdout))) == good
     place = re.compile(rf"Error: {re.escape(str(path))} (line \d+|record \S+)[,:] ")
     assert lines and all(place.match(line) for line in lines), lines
     for text in expected:
@@ -390,7 +398,7 @@ def test_csv_line_numbers_count_the_lines_of_quoted_cells(tmp_path):
     path = write(tmp_path, "v.csv", text)
     records = load_sidecar(path).records
     assert [r.where for r in records] == [f"{path} line 2", f"{path} line 6", f"{path} line 7"]
-    lines = refused_by_cli(path)
+    lines = refused_by_cli(path, good=("a.png",))
     assert lines == [
         f"Error: {path} line 6, field 'tilt': tilt must be strictly between -90 and 90 degrees "
         "(the camera cannot see the wall otherwise), got 95",
@@ -422,7 +430,7 @@ def test_record_errors_through_the_cli_name_every_bad_row(tmp_path):
     path = write(tmp_path, "v.csv", "image,pan,tilt,focal\n"
                  f"a.png,1,2,{'9' * 400}\nb.png,1,2,1e300\nc.png,nan,2,3\nd.png,1,2,3\n"
                  "e.png,89.9999999,89.9999999,300\n")
-    lines = refused_by_cli(path)
+    lines = refused_by_cli(path, good=("d.png",))
     assert [line.split(",")[0].rsplit(" ", 1)[-1] for line in lines] == ["2", "3", "4", "6"]
     assert "field 'focal': out of range" in lines[0]
     assert "field 'focal': focal must be below 1e+07 pixels" in lines[1]

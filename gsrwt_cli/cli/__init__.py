@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import contextlib
 import errno
+import importlib
 import os
 import select
 import sys
@@ -13,14 +14,7 @@ from typing import Any, NoReturn
 import click
 
 from .. import __version__
-from ..imaging import silence_opencv_logging
 from ..messages import escape_controls, one_line, shorten
-from .estimate import estimate
-from .gaze import gaze, track
-from .landmarks import lines, match
-from .params import params
-from .rectify import rectify
-from .render import render
 
 #: Exit status of a command whose standard output was closed by its reader: 128 + SIGPIPE,
 #: what a shell reports for ``cat`` killed by SIGPIPE in ``cat big | head -1``.
@@ -71,12 +65,56 @@ def internal_error_message(error: BaseException) -> str:
                     "(rerun with --debug for details)")
 
 
+#: Each command: the module of this package that defines it, and the first paragraph of its
+#: help (for ``gsrwt --help``; a test checks it against the command's docstring). A command's
+#: module, and what it imports, is loaded only when that command is used, so that
+#: ``gsrwt --version``, ``gsrwt --help`` and the light commands start fast.
+COMMANDS: dict[str, tuple[str, str]] = {
+    "estimate": ("estimate", "Estimate pan, tilt and roll of each image from its straight lines "
+                             "(spec section 7)."),
+    "gaze": ("gaze", "Pan and tilt that centre a target seen on the canonical view, or, with "
+                     "no target, the wall point the camera looks at."),
+    "lines": ("landmarks", "Straight lines (door boundaries) by the Hough transform on frontal "
+                           "views (Sec. 5.4)."),
+    "match": ("landmarks", "Find objects (door knob, peek window) with the Generalized Hough "
+                           "Transform (Sec. 5.4)."),
+    "params": ("params", "Print the GS-RWT parameters (theta, delta, a, gamma, vanishing point "
+                         "and line)."),
+    "rectify": ("rectify", "Rectify images into canonical frontal views of the wall they show "
+                           "(GS-RWT)."),
+    "render": ("render", "Render the view of a camera at --pan/--tilt of a wall covered by "
+                         "TEXTURE."),
+    "track": ("gaze", "Pan and tilt that keep an object centred as the robot drives along the "
+                      "wall."),
+}
+
+
 class GsrwtGroup(click.Group):
-    """A group that reports every error in one bounded line (tracebacks only with ``--debug``).
+    """A group that reports every error in one bounded line (tracebacks only with ``--debug``)
+    and loads each of its :data:`COMMANDS` when it is used.
 
     An EPIPE write to standard output or error leaves as :class:`ClosedOutputError`, for
     :func:`run` to end the process quietly.
     """
+
+    def list_commands(self, ctx: click.Context) -> list[str]:
+        return sorted({*COMMANDS, *self.commands})
+
+    def get_command(self, ctx: click.Context | None, name: str) -> click.Command | None:
+        if name in self.commands or name not in COMMANDS:
+            return self.commands.get(name)
+        module = importlib.import_module(f"{__name__}.{COMMANDS[name][0]}")
+        return getattr(module, name)
+
+    def format_commands(self, ctx: click.Context, formatter: click.HelpFormatter) -> None:
+        """The commands and their one-line help, as click writes them, without loading them."""
+        names = self.list_commands(ctx)
+        limit = formatter.width - 6 - max(len(name) for name in names)
+        stand_ins = {name: click.Command(name, help=text) for name, (_, text) in COMMANDS.items()}
+        rows = [(name, {**stand_ins, **self.commands}[name].get_short_help_str(limit))
+                for name in names]
+        with formatter.section("Commands"):
+            formatter.write_dl(rows)
 
     def make_context(self, info_name: str | None, args: list[str],
                      parent: click.Context | None = None, **extra: Any) -> click.Context:
@@ -129,16 +167,6 @@ def main(ctx: click.Context, debug: bool) -> None:
         warnings.simplefilter("ignore")
 
 
-main.add_command(params)
-main.add_command(rectify)
-main.add_command(estimate)
-main.add_command(render)
-main.add_command(gaze)
-main.add_command(track)
-main.add_command(lines)
-main.add_command(match)
-
-
 def _end_for_closed_stdout() -> NoReturn:
     """Leave quietly with :data:`CLOSED_STDOUT_STATUS` after the reader of our output left.
 
@@ -178,7 +206,13 @@ def run() -> None:
     (:func:`_end_for_closed_stdout`), whether the pipe broke while a command wrote, while
     click printed help or an error, or at the final flush of what was still buffered.
     """
-    silence_opencv_logging()
+    # OpenCV's own log lines would break the one-line-per-problem promise; what gsrwt needs
+    # from the codecs it collects itself. OpenCV reads this when it is first imported.
+    os.environ["OPENCV_LOG_LEVEL"] = "SILENT"
+    if "cv2" in sys.modules:
+        from ..imaging import silence_opencv_logging
+
+        silence_opencv_logging()
     # File names are bytes on POSIX; Python gives a name that is not valid UTF-8 to us with
     # its odd bytes as lone surrogates. Write those back as the very bytes they stand for,
     # so the image column names the real file, instead of failing to encode the row.

@@ -1,19 +1,20 @@
-"""Options and errors shared by several commands, defined once."""
+"""Options and errors shared by several commands, defined once.
+
+It imports only what every command needs (click, numpy): what one option needs (OpenCV's
+interpolation flags, the edge stage) is imported by that option, when a command uses it.
+"""
 
 from __future__ import annotations
 
 import sys
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import click
 
-from ..camera import View
-from ..imaging import INTERPOLATIONS
-from ..landmarks import DEFAULT_EDGE_THRESHOLD
+from ..camera import VIEW_FIELDS
 from ..messages import one_line
-from ..records import VIEW_FIELDS, RecordError, view_from_values
 from ..tables import FORMATS
 from ..targets import (
     DirectoryTargetError,
@@ -24,6 +25,10 @@ from ..targets import (
     UnwritableFileError,
 )
 from ..targets import make_output_directory as create_directory
+
+if TYPE_CHECKING:
+    from ..camera import View
+    from ..records import RecordError
 
 F = TypeVar("F", bound=Callable[..., Any])
 
@@ -44,6 +49,8 @@ def report_error(message: str) -> None:
 
 def view_from_options(values: dict[str, Any]) -> View:
     """The one view the view options describe, or an :class:`InputError` naming the option."""
+    from ..records import RecordError, view_from_values
+
     try:
         return view_from_values(values, "options")
     except RecordError as error:
@@ -125,6 +132,8 @@ def view_options(func: F) -> F:
 
 def interpolation_option(func: F) -> F:
     """``--interpolation``: how output pixels are sampled from the input."""
+    from ..imaging import INTERPOLATIONS
+
     return click.option("--interpolation", type=click.Choice(tuple(INTERPOLATIONS)),
                         default="linear", show_default=True)(func)
 
@@ -137,6 +146,8 @@ def quality_option(func: F) -> F:
 
 def edge_threshold_option(func: F) -> F:
     """``--edge-threshold``: the Sobel magnitude of an edge pixel (lines, match)."""
+    from ..landmarks import DEFAULT_EDGE_THRESHOLD
+
     return click.option("--edge-threshold", type=float, default=DEFAULT_EDGE_THRESHOLD,
                         show_default=True, help="Sobel magnitude of an edge pixel.")(func)
 

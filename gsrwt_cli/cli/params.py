@@ -3,15 +3,12 @@
 from __future__ import annotations
 
 import sys
+from itertools import chain
 from pathlib import Path
 from typing import Any
 
 import click
 
-from ..records import RecordError
-from ..report import PARAMS_COLUMNS, params_row
-from ..sidecar import SidecarError, load_sidecar
-from ..tables import write_table
 from .options import (
     InputError,
     format_option,
@@ -34,30 +31,55 @@ from .options import (
 def params(sidecar: Path | None, fmt: str | None, **kwargs: Any) -> None:
     """Print the GS-RWT parameters (theta, delta, a, gamma, vanishing point and line).
 
-    For one view given by options, or for every row of a sidecar file.
+    For one view given by options, or for every row of a sidecar file. Rows are printed as
+    they are computed; a row that is no valid view is reported on stderr (naming its line)
+    and left out, and the command then exits with status 2.
 
     \b
     Examples:
       gsrwt params --pan 15 --tilt 30 --focal 280 --width 320 --height 240
       gsrwt params --sidecar sample_data/views/views.csv --format json
     """
+    from ..records import RecordError
+    from ..report import PARAMS_CHUNK, PARAMS_COLUMNS, params_row, params_rows
+    from ..sidecar import SidecarError, iter_sidecar_records
+    from ..tables import TableWriter
+
     defaults = view_defaults(kwargs)
-    rows = []
+    fmt = resolve_format(fmt)
     if sidecar is None:
-        rows.append(params_row(view_from_options(defaults)))
-    else:
-        try:
-            records = load_sidecar(sidecar).records
-        except SidecarError as error:
-            raise InputError(str(error)) from None
-        errors = []
-        for record in records:
-            try:
-                rows.append(params_row(record.view(defaults), record.image))
-            except RecordError as error:
-                errors.append(str(error))
-        if errors:
-            for message in errors[:-1]:
-                report_error(message)
-            raise InputError(errors[-1])
-    write_table(sys.stdout, PARAMS_COLUMNS, rows, resolve_format(fmt))
+        writer = TableWriter(sys.stdout, PARAMS_COLUMNS, fmt)
+        writer.write_row(params_row(view_from_options(defaults)))
+        writer.close()
+        return
+    records = iter_sidecar_records(sidecar)
+    try:
+        first = next(records, None)  # a file that cannot be read at all prints no table
+    except SidecarError as error:
+        raise InputError(str(error)) from None
+    writer = TableWriter(sys.stdout, PARAMS_COLUMNS, fmt, flush_rows=False)
+    last_error, block = None, []
+    try:
+        taken = chain([first] if first is not None else [], records)
+        rows = params_rows((record.image, record.merged(defaults), record.where)
+                           for record in taken)
+        for row in rows:
+            if isinstance(row, RecordError):
+                if last_error is not None:
+                    report_error(last_error)
+                last_error = str(row)
+            else:
+                block.append(row)
+                if len(block) == PARAMS_CHUNK:
+                    writer.write_rows(block)
+                    block = []
+    except SidecarError as error:
+        writer.write_rows(block)
+        writer.close()
+        if last_error is not None:
+            report_error(last_error)
+        raise InputError(str(error)) from None
+    writer.write_rows(block)
+    writer.close()
+    if last_error is not None:
+        raise InputError(last_error)

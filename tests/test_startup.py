@@ -1,0 +1,65 @@
+"""Start-up: each command imports only what it uses (issue: speed where users feel it).
+
+Timing is the benchmark's business (``benchmarks/bench_startup.py``); these tests check the
+cause, in real subprocesses: which heavy libraries a command line imports.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import click
+import pytest
+
+from gsrwt_cli.cli import COMMANDS, main
+
+HEAVY = ("numpy", "cv2", "yaml", "tqdm", "PIL", "imagesize")
+
+
+def imported_top_level_modules(*arguments: str) -> set[str]:
+    """The top-level modules ``gsrwt ARGUMENTS`` imports (from ``python -X importtime``)."""
+    result = subprocess.run([sys.executable, "-X", "importtime", "-m", "gsrwt_cli", *arguments],
+                            capture_output=True, text=True, check=False)
+    assert result.returncode == 0, result.stderr[-2000:]
+    names = set()
+    for line in result.stderr.splitlines():
+        if line.startswith("import time:") and "|" in line:
+            names.add(line.rsplit("|", 1)[1].strip().split(".")[0])
+    assert "click" in names  # the parse worked
+    return names
+
+
+@pytest.mark.parametrize("arguments", [("--version",), ("--help",)])
+def test_version_and_help_import_no_heavy_library(arguments):
+    assert imported_top_level_modules(*arguments) & set(HEAVY) == set()
+
+
+def test_one_params_view_imports_numpy_only():
+    imported = imported_top_level_modules("params", "--pan", "10", "--tilt", "20",
+                                          "--focal", "500")
+    assert imported & set(HEAVY) == {"numpy"}
+
+
+def test_a_command_still_gets_what_it_needs():
+    assert {"numpy", "cv2", "tqdm"} <= imported_top_level_modules("rectify", "--help")
+
+
+@pytest.mark.parametrize("name", sorted(COMMANDS))
+def test_the_group_help_of_each_command_is_its_docstrings(name):
+    """``gsrwt --help`` lists the commands from :data:`COMMANDS` without loading them: each
+    line is the one click would make from the command's own docstring."""
+    command = main.get_command(None, name)
+    module, first_paragraph = COMMANDS[name]
+    assert command.callback.__module__ == f"gsrwt_cli.cli.{module}"
+    for limit in (30, 45, 80, 300):
+        assert (click.Command(name, help=first_paragraph).get_short_help_str(limit)
+                == command.get_short_help_str(limit))
+
+
+def test_the_group_help_lists_every_command():
+    result = subprocess.run([sys.executable, "-m", "gsrwt_cli", "--help"], capture_output=True,
+                            text=True, check=True)
+    listed = [line.split()[0] for line in result.stdout.split("Commands:", 1)[1].splitlines()
+              if line.strip()]
+    assert listed == sorted(COMMANDS)
