@@ -236,16 +236,27 @@ class EstimateWorker:
 
 def run_estimates(jobs: list[EstimateJob], options: EstimateOptions, processes: int,
                   on_row: Callable[[dict[str, Any]], None], *, picture_root: Path | None = None,
-                  fork_from_caller: bool = False) -> int:
+                  fork_from_caller: bool = False,
+                  on_progress: Callable[[], None] | None = None) -> int:
     """Estimate every job on :class:`~gsrwt_cli.executor.ProcessExecutor` workers (a worker
     that dies costs only its image), handing rows to ``on_row`` in job order; returns how
-    many failed."""
+    many failed. If the run is stopped (``KeyboardInterrupt``, say), the workers are
+    stopped, every job still gets its row (``interrupted`` for those not done) and the
+    exception goes on."""
     failed = 0
     rows: dict[int, dict[str, Any]] = {}
     following = 0
 
     def died(job: EstimateJob, reason: str) -> dict[str, Any]:
         return {"image": job.name, "status": "error", "error": reason}
+
+    def emit() -> None:
+        nonlocal following, failed
+        while following in rows:
+            done = rows.pop(following)
+            failed += done.get("status") != "ok"
+            on_row(done)
+            following += 1
 
     executor: ProcessExecutor[EstimateJob, dict[str, Any]] = ProcessExecutor(
         EstimateWorker.in_own_process, (options, picture_root, 1 if processes > 1 else 0),
@@ -256,11 +267,16 @@ def run_estimates(jobs: list[EstimateJob], options: EstimateOptions, processes: 
     try:
         for index, row in results:
             rows[index] = row
-            while following in rows:
-                done = rows.pop(following)
-                failed += done.get("status") != "ok"
-                on_row(done)
-                following += 1
+            if on_progress is not None:
+                on_progress()
+            emit()
+    except BaseException:
+        results.close()  # stops the workers
+        for index in range(following, len(jobs)):
+            rows.setdefault(index, {"image": jobs[index].name, "status": "interrupted",
+                                    "error": "not done: the run was interrupted"})
+        emit()
+        raise
     finally:
         results.close()
     return failed

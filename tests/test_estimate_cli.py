@@ -139,3 +139,29 @@ def test_an_output_table_over_an_input_is_refused(tmp_path):
     assert result.returncode == 2
     assert "would overwrite an input" in result.stderr
     assert cv2.imread(str(image)) is not None
+
+
+def test_a_stopped_run_still_gives_every_image_its_row(tmp_path):
+    """SIGTERM after the first rows: the workers stop, the rest are rows marked interrupted,
+    exit code 143."""
+    import signal
+    import subprocess
+
+    from conftest import GSRWT
+
+    for index in range(40):
+        shutil.copy(VIEWS / "door_p20_t-8_f800.jpg", tmp_path / f"door{index:02d}.jpg")
+    process = subprocess.Popen([str(GSRWT), "estimate", str(tmp_path), "--focal", "800",
+                                "-f", "csv", "-j", "1"], stdout=subprocess.PIPE,
+                               stderr=subprocess.PIPE, text=True)
+    assert process.stdout is not None
+    lines = [process.stdout.readline(), process.stdout.readline()]  # header, first row
+    process.send_signal(signal.SIGTERM)
+    rest, errors = process.communicate(timeout=60)
+    rows = list(csv.DictReader(lines + rest.splitlines(keepends=True)))
+    assert process.returncode == 143, errors
+    assert len(rows) == 40
+    statuses = [row["status"] for row in rows]
+    assert statuses[0] == "ok" and statuses[-1] == "interrupted"
+    assert set(statuses) <= {"ok", "interrupted"}
+    assert "interrupted:" in errors and "Traceback" not in errors

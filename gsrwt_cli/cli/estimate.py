@@ -8,6 +8,7 @@ from pathlib import Path, PurePosixPath
 from typing import Any
 
 import click
+from tqdm import tqdm
 
 from ..calibration import CalibrationError
 from ..estimate import WALL_CHOICES
@@ -149,8 +150,11 @@ def estimate(inputs: tuple[str, ...], output: str | None, fmt: str | None, recur
     options = EstimateOptions(min_confidence, wall, input_pixel_limit)
     for problem in unreadable:
         report_error(problem)
-    counts = {"ok": 0, "failed": len(unreadable)}
+    counts = {"ok": 0, "failed": len(unreadable), "interrupted": 0}
     stopped: BaseException | None = None
+    tqdm.monitor_interval = 0  # no monitor thread: workers may fork from this process
+    progress = tqdm(total=len(job_list), unit="img", file=sys.stderr, dynamic_ncols=True,
+                    disable=quiet or not sys.stderr.isatty())
     with stop_on_signals(), open_table(output) as stream:
         writer = TableWriter(stream, ESTIMATE_COLUMNS, table_format)
 
@@ -158,20 +162,28 @@ def estimate(inputs: tuple[str, ...], output: str | None, fmt: str | None, recur
             writer.write_row(row)
             if row.get("status") == "ok":
                 counts["ok"] += 1
+            elif row.get("status") == "interrupted":
+                counts["interrupted"] += 1
             else:
                 counts["failed"] += 1
-                report_error(f"{one_line(row['image'])}: {row.get('error')}")
+                progress.write(f"Error: {one_line(row['image'])}: {row.get('error')}",
+                               file=sys.stderr)
 
         try:
             run_estimates(job_list, options, jobs or os.cpu_count() or 1, on_row,
-                          picture_root=draw, fork_from_caller=fork_workers)
+                          picture_root=draw, fork_from_caller=fork_workers,
+                          on_progress=lambda: progress.update(1))
         except (KeyboardInterrupt, Terminated) as stop:
-            stopped = stop
+            stopped = stop  # every job has its row: the table is still written whole
+        finally:
+            progress.close()
         writer.close()
     if not quiet:
         where = "" if output == "-" else f"; table: {display_path(output)}"
-        click.echo(f"gsrwt: {counts['ok']} estimated, {counts['failed']} failed{where}",
-                   err=True)
+        summary = f"{counts['ok']} estimated, {counts['failed']} failed"
+        if stopped is not None:
+            summary = f"interrupted: {summary}, {counts['interrupted']} not done"
+        click.echo(f"gsrwt: {summary}{where}", err=True)
     if stopped is not None:
         sys.exit(143 if isinstance(stopped, Terminated) else 130)
     if counts["failed"]:
