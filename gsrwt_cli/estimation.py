@@ -254,9 +254,9 @@ def run_estimates(jobs: list[EstimateJob], options: EstimateOptions, processes: 
         nonlocal following, failed
         while following in rows:
             done = rows.pop(following)
+            following += 1  # first: a stop during on_row must not row this image again
             failed += done.get("status") != "ok"
             on_row(done)
-            following += 1
 
     executor: ProcessExecutor[EstimateJob, dict[str, Any]] = ProcessExecutor(
         EstimateWorker.in_own_process, (options, picture_root, 1 if processes > 1 else 0),
