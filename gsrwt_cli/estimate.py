@@ -309,6 +309,25 @@ def _image_cost(lines: np.ndarray, pixel_from_camera: np.ndarray, directions: np
     return float(np.log1p((distance / (CAUCHY_FRACTION * inlier_px)) ** 2).sum())
 
 
+def image_score(lines: np.ndarray, pixel_from_camera: np.ndarray, directions: np.ndarray,
+                inlier_px: float) -> float:
+    """The frame's score measured in the image, comparable between focal lengths:
+    ``sum(length * max(0, 1 - (d / inlier_px)^2))`` with ``d`` each segment's end-point
+    distance from the line through its midpoint and the nearest of the three vanishing
+    points (in pixels, whatever the focal length)."""
+    points = pixel_from_camera @ directions  # (3, 3): the homogeneous VPs, as columns
+    mid = np.column_stack([(lines[:, :2] + lines[:, 2:]) / 2, np.ones(len(lines))])
+    best = np.full(len(lines), np.inf)
+    for k in range(3):
+        through = np.cross(mid, points[:, k])
+        through /= np.maximum(np.hypot(through[:, 0], through[:, 1]), 1e-300)[:, None]
+        distance = np.abs(through[:, 0] * lines[:, 0] + through[:, 1] * lines[:, 1]
+                          + through[:, 2])
+        best = np.minimum(best, distance)
+    lengths = np.hypot(lines[:, 2] - lines[:, 0], lines[:, 3] - lines[:, 1])
+    return float((lengths * np.maximum(0.0, 1.0 - (best / inlier_px) ** 2)).sum())
+
+
 def polish_focal(ideal: np.ndarray, centre: np.ndarray, focal: float, inlier_px: float,
                  span: float = 1.4, iterations: int = 14) -> float:
     """The focal length within ``span`` times ``focal`` at which the segments fit a Manhattan
@@ -521,19 +540,21 @@ def _focal_of(ideal: np.ndarray, centre: np.ndarray, diagonal: float, side: floa
     (``f^2 = -(p1 - c).(p2 - c)``, else None: the image cannot tell), and the better of that
     and the grid's value is polished by :func:`polish_focal` until it settles.
     """
-    def fitted(f: float) -> tuple[Frame, float]:
-        normals, half = interpretation_planes(
-            ideal, _camera_from_pixel(Intrinsics(f, f, centre[0], centre[1])))
-        return fit_manhattan_frame(normals, half, inlier_px, hypotheses=GRID_HYPOTHESES), f
+    def fitted(f: float) -> tuple[Frame, float, float]:
+        camera = Intrinsics(f, f, centre[0], centre[1])
+        normals, half = interpretation_planes(ideal, _camera_from_pixel(camera))
+        frame = fit_manhattan_frame(normals, half, inlier_px, hypotheses=GRID_HYPOTHESES)
+        pixel_from_camera = np.linalg.inv(_camera_from_pixel(camera))
+        return frame, f, image_score(ideal, pixel_from_camera, frame.directions, inlier_px)
 
-    frame, focal = max((fitted(side * factor) for factor in FOCAL_GRID),
-                       key=lambda candidate: candidate[0].score)
+    frame, focal, score = max((fitted(side * factor) for factor in FOCAL_GRID),
+                              key=lambda candidate: candidate[2])
     points = [cluster_vanishing_point(ideal[frame.labels == k], centre, diagonal)
               if (frame.labels == k).sum() >= MIN_DIRECTION_SEGMENTS else None for k in range(3)]
     from_points = focal_from_vanishing_points(points, centre, diagonal)
     if from_points is None:
         return None
-    if fitted(from_points)[0].score > frame.score:
+    if fitted(from_points)[2] > score:
         focal = from_points
     for _ in range(4):  # each polish re-fits the frame (its inliers) at the new focal length
         polished = polish_focal(ideal, centre, focal, inlier_px)
