@@ -16,7 +16,7 @@ import cv2
 import numpy as np
 
 ROOT = Path(__file__).resolve().parent.parent
-PHOTO = ROOT / "tests" / "data" / "building.jpg"
+PHOTO = ROOT / "tests" / "data" / "facade" / "building.jpg"
 
 
 def main() -> None:

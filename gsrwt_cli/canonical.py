@@ -29,6 +29,8 @@ class CanonicalView:
     path: Path
     pixels: np.ndarray
     pixel_map: PixelMap | None  # canonical from source pixels; None: frontal already
+    source_size: tuple[int, int] | None = None  # (width, height) of the image rectified
+    units_per_pixel: float | None = None  # wall units per canonical pixel, Zc / f if known
 
     def to_source(self, points: np.ndarray) -> np.ndarray | None:
         """``(N, 2)`` canonical pixels in the original image, or None if there is no map."""
@@ -60,4 +62,6 @@ def canonical_views(
         except (RecordError, ValueError) as error:
             yield path, str(error)
             continue
-        yield CanonicalView(path, frontal, info.pixel_map)
+        units = None if view.distance is None else view.distance / view.focal
+        yield CanonicalView(path, frontal, info.pixel_map, (image.shape[1], image.shape[0]),
+                            units)

@@ -24,6 +24,7 @@ import cv2
 import imagesize
 import numpy as np
 
+from .messages import one_line
 from .pixelmap import PixelMap
 
 #: File types gsrwt looks for in directories (OpenCV reads them all).
@@ -270,18 +271,57 @@ def _captured_stderr(messages: list[str]) -> Iterator[None]:
             messages.extend(line.strip() for line in text.splitlines() if line.strip())
 
 
-def decode_image(data: bytes, max_pixels: float = DEFAULT_MAX_INPUT_PIXELS) -> np.ndarray:
+def _decode_jpeg(data: bytes, padded: bool = False,
+                 into: np.ndarray | None = None) -> np.ndarray | None:
+    """A grey or colour JPEG decoded by libjpeg-turbo (simplejpeg), as OpenCV would decode
+    it (grey, or BGR; BGRA with an opaque fourth channel if ``padded``), into the memory of
+    ``into`` if it is padded and ``into`` is big enough; None for any other JPEG (CMYK,
+    12-bit: OpenCV's job).
+
+    libjpeg reports damaged data as warnings; simplejpeg's strict mode raises them, so a
+    damaged JPEG is an error here with libjpeg's own words, with nothing to capture.
+    """
+    import simplejpeg  # imported here: the commands that decode nothing start faster
+
+    try:
+        height, width, colorspace, _ = simplejpeg.decode_jpeg_header(data)
+    except ValueError:
+        return None
+    if colorspace not in ("Gray", "YCbCr"):
+        return None
+    space = "GRAY" if colorspace == "Gray" else "BGRA" if padded else "BGR"
+    channels = {"GRAY": 1, "BGR": 3, "BGRA": 4}[space]
+    if space != "BGRA" or into is not None and into.nbytes < height * width * channels:
+        into = None  # only the warp's BGRA goes into the caller's memory
+    try:
+        image = simplejpeg.decode_jpeg(data, colorspace=space, buffer=into, strict=True)
+    except ValueError as error:
+        raise ImageError(f"corrupt JPEG ({one_line(str(error), 200)})") from None
+    return image[..., 0] if space == "GRAY" else image
+
+
+def decode_image(data: bytes, max_pixels: float = DEFAULT_MAX_INPUT_PIXELS, *,
+                 padded: bool = False, into: np.ndarray | None = None) -> np.ndarray:
     """Decode an image file's bytes as stored: 8/16-bit or float, grey, BGR or BGRA.
 
     The header is measured first (:func:`header_size`): an image of more than ``max_pixels``
     pixels is refused before any pixel memory is allocated. Raises :class:`ImageError` for
-    data that is empty, truncated, damaged or not decodable; what OpenCV returns is checked,
-    never trusted. EXIF orientation is not applied (pan and tilt describe the sensor).
+    data that is empty, truncated, damaged or not decodable; what the codec returns is
+    checked, never trusted. EXIF orientation is not applied (pan and tilt describe the
+    sensor). JPEGs are decoded by :func:`_decode_jpeg` (``padded``: a colour JPEG as BGRA
+    with an opaque fourth channel, for the warp; ``into``: memory to decode it into), other
+    files by OpenCV.
     """
     if not data:
         raise ImageError("empty file")
     width, height = check_input_size(header_size(data), max_pixels)
     _check_complete(data)
+    image = _decode_jpeg(data, padded, into) if data[:3] == b"\xff\xd8\xff" else None
+    if image is not None:
+        if image.shape[:2] != (height, width):
+            raise ImageError(f"its header says {width}x{height} pixels but it decodes as "
+                             f"{image.shape[1]}x{image.shape[0]}")
+        return image
     with _codec_messages() as messages:
         try:
             image = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_UNCHANGED)
@@ -395,18 +435,19 @@ def warp_image(
 class Scratch:
     """One worker's memory for decoding and warping an image at a time.
 
-    A colour image is decoded (into memory OpenCV allocates: it cannot decode bytes into a
-    given array), padded to BGRA in region 1 and warped into region 0. Fresh memory costs
-    page faults (the warp writes about 40% slower into it); in a worker's own process
-    :func:`keep_freed_memory` makes the allocator hand the same memory back image after image,
-    so the regions are released before each decode and rebuilt from what the decoder frees.
-    A worker so peaks at about 3.6 decoded images' worth of memory (12 megapixels, measured).
-    Use :meth:`read`, then :meth:`warp`.
+    A colour JPEG is decoded straight to BGRA into region 1 and warped into region 0, both
+    kept from image to image. Any other colour image is decoded by OpenCV (into memory it
+    allocates: it cannot decode bytes into a given array), padded to BGRA in region 1 and
+    warped into region 0; those regions are released before each such decode and rebuilt
+    from what the decoder frees. Fresh memory costs page faults (the warp writes about 40%
+    slower into it); in a worker's own process :func:`keep_freed_memory` makes the allocator
+    hand the same memory back image after image. Use :meth:`read`, then :meth:`warp`.
     """
 
     def __init__(self) -> None:
         self._regions: list[np.ndarray] = [np.empty(0, np.uint8), np.empty(0, np.uint8)]
         self._decoded: np.ndarray | None = None
+        self._padded = False  # the decoded image is a JPEG's BGRA, fourth channel opaque
 
     def array(self, region: int, shape: tuple[int, ...], dtype: np.dtype) -> np.ndarray:
         """An uninitialized array of ``shape`` and ``dtype`` in ``region`` (0 or 1)."""
@@ -422,14 +463,21 @@ class Scratch:
 
         The previous image is dropped first, so a failure never leaves its pixels behind.
         """
-        self._decoded = None
-        # Both regions are given back before decoding: the decoder's own frames reuse their
-        # memory (kept in the heap by keep_freed_memory), and the regions are rebuilt from the
-        # memory the decoder frees. Holding them across the decode costs two frames more.
-        self._regions = [np.empty(0, np.uint8), np.empty(0, np.uint8)]
-        image = read_image(path, max_pixels)
+        self._decoded, self._padded = None, False
+        data = read_file_bytes(path)
+        size = header_size(data) if data[:3] == b"\xff\xd8\xff" else None
+        if size is not None and size[0] * size[1] <= max_pixels:
+            into = self.array(1, (size[0] * size[1] * 4,), np.uint8)
+            image = decode_image(data, max_pixels, padded=True, into=into)
+            self._padded = image.ndim == 3 and image.shape[2] == 4
+        else:
+            # Both regions are given back before OpenCV decodes: its own frames reuse their
+            # memory (kept in the heap by keep_freed_memory), and the regions are rebuilt from
+            # the memory it frees. Holding them across the decode costs two frames more.
+            self._regions = [np.empty(0, np.uint8), np.empty(0, np.uint8)]
+            image = decode_image(data, max_pixels)
         self._decoded = image
-        return image
+        return image[..., :3] if self._padded else image
 
     def warp(
         self,
@@ -440,13 +488,16 @@ class Scratch:
         antialias: bool = False,
     ) -> Working:
         """Warp the image :meth:`read` decoded (see :func:`warp_working`)."""
-        image, self._decoded = self._decoded, None
+        image, padded_jpeg = self._decoded, self._padded
+        self._decoded, self._padded = None, False
         if image is None:
             raise RuntimeError("Scratch.warp needs an image from Scratch.read first")
         width, height = pixel_map.size
         channels = 1 if image.ndim == 2 else image.shape[2]
         converts = channels == 3 or (alpha and channels == 1)
-        if converts:
+        if padded_jpeg:  # its opaque fourth channel is the padding, or the alpha asked for
+            source = Working(image, padded=not alpha)
+        elif converts:
             padded = self.array(1, (*image.shape[:2], 4), image.dtype)
             source = to_working(image, alpha, padded)
             del image  # free the decoded pixels before the warp allocates

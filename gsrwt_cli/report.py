@@ -172,7 +172,7 @@ TRACK_COLUMNS = ("position", "pan_deg", "tilt_deg", "theta_deg", "foreshortening
 
 #: Columns of ``gsrwt lines`` and ``gsrwt match``.
 LINES_COLUMNS = ("image", "rho", "theta_deg", "votes", "x1", "y1", "x2", "y2",
-                 "x1_src", "y1_src", "x2_src", "y2_src")
+                 "x1_src", "y1_src", "x2_src", "y2_src", "length", "contrast")
 MATCH_COLUMNS = ("image", "template", "x", "y", "scale", "votes", "score", "x_src", "y_src")
 
 
@@ -181,7 +181,7 @@ def line_row(image: Path, line: Line, to_source: ToSource) -> dict[str, Any]:
     end points when ``to_source`` maps frontal pixels back to the image's."""
     row: dict[str, Any] = {"image": str(image), "rho": line.rho, "theta_deg": line.theta_deg,
                            "votes": line.votes, "x1": line.x1, "y1": line.y1, "x2": line.x2,
-                           "y2": line.y2}
+                           "y2": line.y2, "length": line.length, "contrast": line.contrast}
     source = to_source(np.array([[line.x1, line.y1], [line.x2, line.y2]]))
     if source is not None:
         row.update(x1_src=source[0, 0], y1_src=source[0, 1], x2_src=source[1, 0],

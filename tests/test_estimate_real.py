@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 from conftest import run_gsrwt
 
-BUILDING = Path(__file__).resolve().parent / "data" / "building.jpg"
+BUILDING = Path(__file__).resolve().parent / "data" / "facade" / "building.jpg"
 
 
 def segments(grey: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -204,7 +204,7 @@ def test_the_lens_is_removed_on_real_photos_of_a_chessboard():
     from gsrwt_cli.estimate import estimate_pose
     from gsrwt_cli.records import load_camera_file
 
-    data = BUILDING.parent
+    data = BUILDING.parent.parent
     camera = load_camera_file(str(data / "right_camera.yml"))
     with_lens, pinhole = [], []
     with open(data / "right_poses.csv", newline="") as stream:

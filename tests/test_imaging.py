@@ -114,3 +114,76 @@ def test_importing_the_library_changes_no_process_wide_state():
     )
     result = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
     assert result.stdout.strip() == "unchanged", result.stderr
+
+
+JPEG_VARIANTS = {
+    "420": [], "444": [cv2.IMWRITE_JPEG_SAMPLING_FACTOR, cv2.IMWRITE_JPEG_SAMPLING_FACTOR_444],
+    "422": [cv2.IMWRITE_JPEG_SAMPLING_FACTOR, cv2.IMWRITE_JPEG_SAMPLING_FACTOR_422],
+    "progressive": [cv2.IMWRITE_JPEG_PROGRESSIVE, 1],
+    "restarts": [cv2.IMWRITE_JPEG_RST_INTERVAL, 2],
+}
+
+
+def test_jpegs_decode_to_exactly_opencvs_pixels():
+    """JPEGs are decoded by libjpeg-turbo's own API (simplejpeg): pixel for pixel what
+    cv2.imdecode gives, for real photos (grey and colour) and every chroma layout."""
+    from pathlib import Path
+
+    from gsrwt_cli.imaging import decode_image
+
+    samples = [path.read_bytes() for path in sorted((Path(__file__).parent / "data")
+                                                     .glob("*.jpg"))]
+    colour = smooth_texture(301, 403, 11)
+    samples += [cv2.imencode(".jpg", colour, params)[1].tobytes()
+                for params in JPEG_VARIANTS.values()]
+    samples.append(cv2.imencode(".jpg", colour[..., 1])[1].tobytes())
+    assert len(samples) > 15
+    for data in samples:
+        expected = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_UNCHANGED)
+        np.testing.assert_array_equal(decode_image(data), expected)
+        padded = decode_image(data, padded=True)
+        if expected.ndim == 3:
+            assert padded.shape[2] == 4 and (padded[..., 3] == 255).all()
+            np.testing.assert_array_equal(padded[..., :3], expected)
+
+
+def test_scratch_decodes_jpegs_into_its_own_memory_with_no_pixels_left_behind(tmp_path):
+    """A worker's sequence of JPEGs (colour, grey, other sizes, damaged) and PNGs: each warp
+    is exactly the warp of OpenCV's decode of that file, and a damaged file is an error."""
+    colour = smooth_texture(120, 160, 1)
+    files = [
+        ("a.jpg", cv2.imencode(".jpg", colour)[1].tobytes()),
+        ("b.jpg", cv2.imencode(".jpg", smooth_texture(120, 160, 2), JPEG_VARIANTS["444"])[1]
+         .tobytes()),
+        ("c.png", cv2.imencode(".png", smooth_texture(90, 100, 3))[1].tobytes()),
+        ("d.jpg", cv2.imencode(".jpg", smooth_texture(200, 210, 4, channels=1))[1].tobytes()),
+        ("e.jpg", None),  # damaged: a hole in the middle, an end marker
+        ("f.jpg", cv2.imencode(".jpg", smooth_texture(130, 170, 5))[1].tobytes()),
+    ]
+    good = files[0][1]
+    files[4] = ("e.jpg", good[: len(good) // 2] + bytes(300) + good[-2:])
+    scratch = Scratch()
+    for name, data in files:
+        path = tmp_path / name
+        path.write_bytes(data)
+        expected_image = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_UNCHANGED)
+        if name == "e.jpg":
+            with pytest.raises(ImageError, match="corrupt JPEG"):
+                scratch.read(path)
+            with pytest.raises(RuntimeError):
+                scratch.warp(PixelMap(np.eye(3), (10, 10)))  # nothing of the last image
+            continue
+        height, width = expected_image.shape[:2]
+        homography = output_from_input(View(20, -10, 150, width=width, height=height))
+        size = (width + 30, height - 10)
+        for alpha in (False, True):
+            decoded = scratch.read(path)
+            assert decoded.shape == expected_image.shape
+            np.testing.assert_array_equal(decoded, expected_image)
+            del decoded
+            warped = scratch.warp(PixelMap(homography, size), "linear", 9, alpha)
+            expected = warp_image(expected_image, PixelMap(homography, size), "linear", 9,
+                                  alpha)
+            got = cv2.cvtColor(warped.pixels, cv2.COLOR_BGRA2BGR) if warped.padded else (
+                warped.pixels)
+            np.testing.assert_array_equal(got, expected)

@@ -14,6 +14,7 @@ import pytest
 from conftest import smooth_texture
 
 from gsrwt_cli.landmarks import build_template, edge_map, hough_lines, match_template
+from gsrwt_cli.landmarks.edges import line_edges
 
 #: Model bounding boxes of the thesis, read as ``(width, height)`` in pixels (Sec. 5.2.2: "40x100"
 #: for the door knob, "120x90" for the peek window).
@@ -242,11 +243,90 @@ def test_flat_and_gently_shaded_images_have_no_lines():
     assert hough_lines(ramp) == []
 
 
-def test_short_edges_stay_below_min_votes():
+def test_short_edges_stay_below_min_votes_and_min_length():
     image = np.full((120, 160), 200, np.uint8)
     image[40:70, 60:90] = 40  # a 30x30 square: each edge cell collects fewer than 30 votes
-    assert hough_lines(image) == []  # thesis threshold: 50 votes
-    assert len(hough_lines(image, min_votes=20)) == 4
+    assert hough_lines(image, min_votes=50, min_length=0) == []  # the thesis's 50 votes
+    assert hough_lines(image) == []  # each side is 29 px from first to last pixel
+    sides = hough_lines(image, min_votes=15, min_length=15)
+    assert len(sides) == 4
+    for line in sides:  # from the first to the last pixel row (column) of the square
+        assert line.length == pytest.approx(29.0, abs=0.5) and line.votes >= 15
+        assert sorted([line.y1, line.y2] if abs(line.x1 - line.x2) < 1 else
+                      [line.x1, line.x2]) == pytest.approx([40, 69] if abs(line.x1 - line.x2)
+                                                           < 1 else [60, 89], abs=0.5)
+
+
+def test_a_line_is_cut_where_its_edge_has_a_gap():
+    image = np.full((300, 200), 200, np.uint8)
+    image[20:120, 80:] = 60  # x = 79.5, rows 20..119 and 150..279: a 30-row gap between
+    image[150:280, 80:] = 60
+    pieces = sorted((line for line in hough_lines(image, orientation="vertical")),
+                    key=lambda line: min(line.y1, line.y2))
+    assert len(pieces) == 2
+    for line, (top, bottom) in zip(pieces, ((20, 119), (150, 279))):
+        assert line.rho == pytest.approx(-79.5, abs=0.1)
+        ends = sorted([line.y1, line.y2])
+        # The ends are the first and last pixel rows of the edge.
+        assert ends == pytest.approx([top, bottom], abs=0.5)
+        assert line.length == pytest.approx(ends[1] - ends[0])
+        assert line.contrast > 200  # a 140-level step: well over the threshold
+    (whole,) = hough_lines(image, orientation="vertical", max_gap=40)
+    assert sorted([whole.y1, whole.y2]) == pytest.approx(
+        [min(pieces[0].y1, pieces[0].y2), max(pieces[1].y1, pieces[1].y2)], abs=0.5)
+    (longer,) = hough_lines(image, orientation="vertical", min_length=110)
+    assert longer.length == pytest.approx(pieces[1].length, abs=0.5)
+
+
+def test_orientation_filters():
+    image = np.full((200, 240), 200, np.uint8)
+    image[40:160, 60:180] = 60  # a square: two vertical and two horizontal sides
+    every = hough_lines(image)
+    vertical = hough_lines(image, orientation="vertical")
+    horizontal = hough_lines(image, orientation="horizontal")
+    assert len(every) == 4 and len(vertical) == 2 and len(horizontal) == 2
+    assert {round(abs(line.rho), 1) for line in vertical} == {59.5, 179.5}
+    assert {round(abs(line.rho), 1) for line in horizontal} == {39.5, 159.5}
+    with pytest.raises(ValueError):
+        hough_lines(image, orientation="diagonal")
+
+
+def test_hysteresis_keeps_the_faint_part_of_a_strong_edge_only():
+    # An edge fading from a 40-level step (top) to a 6-level one (bottom), as a door frame
+    # in falling light, and beside it an isolated 6-level step.
+    step = np.linspace(40, 6, 240)[:, None]
+    image = np.full((240, 220), 150.0)
+    image[:, 60:] -= step
+    image[:, 150:] -= 6
+    grey = np.rint(image).astype(np.uint8)
+    edges = line_edges(grey)
+    assert edges.magnitude[230, 55:65].max() < 25  # the faint end alone is under threshold
+    assert edges.mask[3:237, 58:62].any(axis=1).all()  # but kept: the same edge is strong
+    assert not edges.mask[:, 140:160].any()  # the isolated faint edge is not
+    (line,) = hough_lines(grey, orientation="vertical")
+    assert abs(line.rho) == pytest.approx(59.5, abs=0.2) and line.length > 225
+
+
+def test_magnification_lifts_a_stretched_edge_over_the_threshold():
+    image = np.full((200, 200), 150, np.uint8)
+    image[:, 100:] = 144  # a 6-level step: under the threshold unmagnified
+    assert not line_edges(image).mask.any()
+    stretched = line_edges(image, magnification=np.full(image.shape, 2.5, np.float32))
+    assert stretched.mask[5:195, 98:102].any(axis=1).all()
+    assert hough_lines(image, edges=stretched)
+
+
+def test_no_edges_at_the_border_of_the_fill():
+    image = np.full((200, 200), 180, np.uint8)
+    valid = np.ones(image.shape, bool)
+    valid[:, :50] = False
+    image[~valid] = 0  # the fill
+    image[:, 120:] = 90  # a real edge at x = 119.5
+    edges = line_edges(image, valid=valid)
+    assert not edges.mask[:, :53].any() and not edges.support[:, :53].any()
+    (line,) = hough_lines(image, edges=edges)
+    assert abs(line.rho) == pytest.approx(119.5, abs=0.1)
+    assert len(hough_lines(image)) == 2  # without the mask the fill's border is a line
 
 
 def test_empty_images_give_no_lines():

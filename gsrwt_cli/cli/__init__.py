@@ -74,7 +74,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
                              "(spec section 7)."),
     "gaze": ("gaze", "Pan and tilt that centre a target seen on the canonical view, or, with "
                      "no target, the wall point the camera looks at."),
-    "lines": ("landmarks", "Straight lines (door boundaries) by the Hough transform on frontal "
+    "lines": ("landmarks", "Straight segments (door boundaries) by the Hough transform on frontal "
                            "views (Sec. 5.4)."),
     "match": ("landmarks", "Find objects (door knob, peek window) with the Generalized Hough "
                            "Transform (Sec. 5.4)."),

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import math
 import sys
 from collections.abc import Iterable, Iterator
@@ -16,6 +17,7 @@ from ..imaging import ImageError, read_image
 from ..landmarks import (
     DEFAULT_MIN_VOTES,
     DEFAULT_THETA_STEP_DEG,
+    EdgeMap,
     Template,
     build_template,
     colour8,
@@ -24,6 +26,10 @@ from ..landmarks import (
     match_template,
 )
 from ..landmarks.drawing import draw_lines, draw_matches
+from ..landmarks.edges import DEFAULT_LINE_THRESHOLD, line_edges
+from ..landmarks.frontal import frontal_edges
+from ..landmarks.ght import DEFAULT_MATCH_THRESHOLD
+from ..landmarks.hough import DEFAULT_MAX_GAP, DEFAULT_MIN_LENGTH, ORIENTATIONS
 from ..messages import quote
 from ..report import LINES_COLUMNS, MATCH_COLUMNS, line_row, match_row
 from ..sidecar import SidecarError, load_sidecar
@@ -110,28 +116,61 @@ def _readable(
             yield view
 
 
+def _edges(view: CanonicalView, threshold: float) -> EdgeMap:
+    """The edge stage of ``lines`` and ``match`` on a view (:func:`frontal_edges`)."""
+    return frontal_edges(grey8(view.pixels), view.pixel_map, view.source_size, threshold)
+
+
+def _min_length_px(view: CanonicalView, pixels: float, units: float | None) -> float | None:
+    """The shortest segment in the view's pixels: ``--min-length-units`` through the view's
+    ``Zc / f`` when given (None, reported, when the view's distance is unknown)."""
+    if units is None:
+        return pixels
+    if view.units_per_pixel is None:
+        report_error(f"{view.path}: --min-length-units needs the camera-to-wall distance "
+                     "(--distance or a 'distance' column) and the camera's parameters")
+        return None
+    return units / view.units_per_pixel
+
+
 @click.command()
 @images_argument
 @raw_views_sidecar_option
 @view_options
-@edge_threshold_option
+@functools.partial(edge_threshold_option, default=DEFAULT_LINE_THRESHOLD,
+                   text="High hysteresis threshold: gradient magnitude (3x3 Sobel of the "
+                        "smoothed view, x magnification) a chain of edge pixels needs; "
+                        "it keeps pixels down to 0.4 of it.")
 @click.option("--theta-step", type=float, default=DEFAULT_THETA_STEP_DEG, show_default=True,
               help="Orientation sampling, degrees.")
 @click.option("--min-votes", type=click.IntRange(min=1), default=DEFAULT_MIN_VOTES,
-              show_default=True, help="Votes a line needs.")
+              show_default=True, help="Votes a Hough cell needs to be a candidate line.")
+@click.option("--max-gap", type=click.FloatRange(min=0), default=DEFAULT_MAX_GAP,
+              show_default=True, help="Longest gap inside a segment, frontal pixels.")
+@click.option("--min-length", type=click.FloatRange(min=0), default=DEFAULT_MIN_LENGTH,
+              show_default=True, help="Shortest segment reported, frontal pixels.")
+@click.option("--min-length-units", type=click.FloatRange(min=0), default=None,
+              help="Shortest segment in wall units (needs the distance); instead of "
+                   "--min-length.")
+@click.option("--orientation", type=click.Choice(ORIENTATIONS), default="all",
+              show_default=True, help="Keep vertical or horizontal segments only (within "
+                                      "5 degrees).")
 @draw_option("lines")
 @format_option
 def lines(images: tuple[Path, ...], sidecar: Path | None, edge_threshold: float,
-          theta_step: float, min_votes: int, draw: Path | None, fmt: str | None,
-          **view_kwargs: Any) -> None:
-    """Straight lines (door boundaries) by the Hough transform on frontal views (Sec. 5.2.2).
+          theta_step: float, min_votes: int, max_gap: float, min_length: float,
+          min_length_units: float | None, orientation: str, draw: Path | None,
+          fmt: str | None, **view_kwargs: Any) -> None:
+    """Straight segments (door boundaries) by the Hough transform on frontal views (Sec. 5.2.2).
 
-    Each edge pixel (3x3 Sobel) votes once, at its own gradient orientation. x1..y2 are
-    the segment's end points in the frontal view, x1_src..y2_src in the original image.
+    Edges: thin hysteresis edges of the smoothed 3x3 Sobel gradient, compensated for the
+    rectification's magnification, none at the fill. Each edge pixel votes once, at its own
+    gradient orientation; each line is cut where its edge pixels have gaps. x1..y2 are the
+    segment's end points in the frontal view, x1_src..y2_src in the original image.
 
     \b
     Example:
-      gsrwt lines sample_data/views/corridor_p30_t15.png --sidecar sample_data/views/views.csv
+      gsrwt lines sample_data/views --sidecar sample_data/views/views.csv --orientation vertical
     """
     paths = _image_paths(images)
     views = _sources(paths, sidecar, view_kwargs)
@@ -142,8 +181,13 @@ def lines(images: tuple[Path, ...], sidecar: Path | None, edge_threshold: float,
         picture = _drawing_target(drawings, view)
         if drawings is not None and picture is None:
             failures.append(view.path)
-        found = hough_lines(grey8(view.pixels), edge_threshold=edge_threshold,
-                            theta_step_deg=theta_step, min_votes=min_votes)
+        shortest = _min_length_px(view, min_length, min_length_units)
+        if shortest is None:
+            failures.append(view.path)
+            continue
+        found = hough_lines(view.pixels, edges=_edges(view, edge_threshold),
+                            theta_step_deg=theta_step, min_votes=min_votes, max_gap=max_gap,
+                            min_length=shortest, orientation=orientation)
         overlay = colour8(view.pixels) if picture is not None else None
         writer.write_rows(line_row(view.path, line, view.to_source) for line in found)
         if overlay is not None:
@@ -182,7 +226,9 @@ def _parse_scales(text: str, steps: int) -> list[float]:
               help="Fraction of the model's edge pixels a match must find.")
 @click.option("--max-matches", type=click.IntRange(min=1), default=1, show_default=True,
               help="Matches per image and template.")
-@edge_threshold_option
+@functools.partial(edge_threshold_option, default=DEFAULT_MATCH_THRESHOLD,
+                   text="High hysteresis threshold of the edges (as for gsrwt lines), in the "
+                        "template and the views.")
 @draw_option("matches")
 @format_option
 def match(images: tuple[Path, ...], templates: tuple[Path, ...], sidecar: Path | None,
@@ -191,7 +237,8 @@ def match(images: tuple[Path, ...], templates: tuple[Path, ...], sidecar: Path |
           **view_kwargs: Any) -> None:
     """Find objects (door knob, peek window) with the Generalized Hough Transform (Sec. 5.2.2).
 
-    The model is every edge pixel of the template image, its centre the reference point;
+    The model is every edge pixel of the template image (the edges of gsrwt lines), its
+    centre the reference point;
     on frontal views one fixed model serves every camera angle. x, y: the object's centre
     in the frontal view; x_src, y_src: in the original image.
 
@@ -205,8 +252,8 @@ def match(images: tuple[Path, ...], templates: tuple[Path, ...], sidecar: Path |
     models: list[tuple[Path, Template]] = []
     for path in templates:
         try:
-            models.append((path, build_template(grey8(read_image(path)),
-                                                edge_threshold=edge_threshold)))
+            grey = grey8(read_image(path))
+            models.append((path, build_template(grey, edges=line_edges(grey, edge_threshold))))
         except (ImageError, ValueError) as error:
             raise InputError(f"--template {path}: {error}") from None
     paths = _image_paths(images)
@@ -218,10 +265,10 @@ def match(images: tuple[Path, ...], templates: tuple[Path, ...], sidecar: Path |
         picture = _drawing_target(drawings, view)
         if drawings is not None and picture is None:
             failures.append(view.path)
-        grey = grey8(view.pixels)
+        edges = _edges(view, edge_threshold)
         overlay = colour8(view.pixels) if picture is not None else None
         for path, model in models:
-            found = match_template(grey, model, scales=scale_list, edge_threshold=edge_threshold,
+            found = match_template(view.pixels, model, scales=scale_list, edges=edges,
                                    min_score=min_score, max_matches=max_matches)
             writer.write_rows(match_row(view.path, path.name, item, view.to_source)
                               for item in found)

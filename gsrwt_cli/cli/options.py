@@ -144,12 +144,16 @@ def quality_option(func: F) -> F:
                         help="JPEG and WebP quality.")(func)
 
 
-def edge_threshold_option(func: F) -> F:
-    """``--edge-threshold``: the Sobel magnitude of an edge pixel (lines, match)."""
-    from ..landmarks import DEFAULT_EDGE_THRESHOLD
+def edge_threshold_option(func: F, default: float | None = None,
+                          text: str = "Sobel magnitude of an edge pixel.") -> F:
+    """``--edge-threshold``: the Sobel magnitude of an edge pixel (lines, match); ``default``
+    None is the thesis's raw threshold."""
+    if default is None:
+        from ..landmarks import DEFAULT_EDGE_THRESHOLD
 
-    return click.option("--edge-threshold", type=float, default=DEFAULT_EDGE_THRESHOLD,
-                        show_default=True, help="Sobel magnitude of an edge pixel.")(func)
+        default = DEFAULT_EDGE_THRESHOLD
+    return click.option("--edge-threshold", type=click.FloatRange(min=0, min_open=True),
+                        default=default, show_default=True, help=text)(func)
 
 
 def images_argument(func: F) -> F:

@@ -1,10 +1,13 @@
-"""Landmarks on rectified (frontal) wall images: straight lines and door parts (thesis Sec. 5.2.2).
+"""Landmarks on rectified (frontal) wall images: straight segments and door parts (Sec. 5.2.2).
 
 Once a wall has been rectified into its frontal view, the thesis looks for a door with two
-voting schemes on the Sobel edges of the grey image (:mod:`.edges`):
+voting schemes on the Sobel edges of the grey image (:mod:`.edges`: the thesis's raw
+threshold, :func:`edge_map`, and the thin hysteresis edges of real photos,
+:func:`line_edges`, given the view's fill and magnification by :mod:`.frontal`):
 
-- straight lines with a Hough transform in which every edge pixel casts ONE vote, in the
-  orientation bin of its own gradient direction (:func:`hough_lines`, :mod:`.hough`);
+- straight segments with a Hough transform in which every edge pixel casts ONE vote, in the
+  orientation bin of its own gradient direction, each line cut where its edge pixels have
+  gaps (:func:`hough_lines`, :mod:`.hough`);
 - the door knob and the peek window with the Generalized Hough Transform (GHT, Ballard 1981)
   and a single fixed model cut out of an example image (:func:`build_template`,
   :func:`match_template`, :mod:`.ght`).
@@ -22,18 +25,39 @@ colour arrays, converted to grey with :func:`cv2.cvtColor`.
 
 from __future__ import annotations
 
-from .edges import DEFAULT_EDGE_THRESHOLD, EdgeMap, colour8, edge_map, grey8, grey_image
+from .edges import (
+    DEFAULT_EDGE_THRESHOLD,
+    DEFAULT_LINE_THRESHOLD,
+    EdgeMap,
+    colour8,
+    edge_map,
+    grey8,
+    grey_image,
+    line_edges,
+)
 from .ght import DEFAULT_GHT_ORIENTATION_STEP_DEG, Match, Template, build_template, match_template
-from .hough import DEFAULT_MIN_VOTES, DEFAULT_THETA_STEP_DEG, Line, hough_lines
+from .hough import (
+    DEFAULT_MAX_GAP,
+    DEFAULT_MIN_LENGTH,
+    DEFAULT_MIN_VOTES,
+    DEFAULT_THETA_STEP_DEG,
+    ORIENTATIONS,
+    Line,
+    hough_lines,
+)
 
 __all__ = [
     "DEFAULT_EDGE_THRESHOLD",
     "DEFAULT_GHT_ORIENTATION_STEP_DEG",
+    "DEFAULT_LINE_THRESHOLD",
+    "DEFAULT_MAX_GAP",
+    "DEFAULT_MIN_LENGTH",
     "DEFAULT_MIN_VOTES",
     "DEFAULT_THETA_STEP_DEG",
     "EdgeMap",
     "Line",
     "Match",
+    "ORIENTATIONS",
     "Template",
     "build_template",
     "colour8",
@@ -41,5 +65,6 @@ __all__ = [
     "grey8",
     "grey_image",
     "hough_lines",
+    "line_edges",
     "match_template",
 ]

@@ -1,4 +1,5 @@
-"""Pictures of what was found: lines and matches drawn in red on an 8-bit BGR frontal view."""
+"""Pictures of what was found, drawn on an 8-bit BGR frontal view: segments in red (vertical),
+blue (horizontal) or green (others), each with a dot at its ends; matches as red boxes."""
 
 from __future__ import annotations
 
@@ -8,18 +9,30 @@ import cv2
 import numpy as np
 
 from .ght import Match, Template
-from .hough import Line
+from .hough import Line, orientation_allows
 
-#: The colour (BGR) and thickness (pixels) of what is drawn.
+#: The colours (BGR) and thickness (pixels) of what is drawn.
 RED = (0, 0, 255)
+BLUE = (255, 64, 0)
+GREEN = (0, 200, 0)
 THICKNESS = 2
 
 
+def line_colour(line: Line) -> tuple[int, int, int]:
+    """Red for a vertical segment, blue for a horizontal one, green for the others."""
+    if orientation_allows(line.theta_deg, "vertical"):
+        return RED
+    return BLUE if orientation_allows(line.theta_deg, "horizontal") else GREEN
+
+
 def draw_lines(picture: np.ndarray, lines: Iterable[Line]) -> None:
-    """Draw each line's segment, end points rounded to the nearest pixel, into ``picture``."""
+    """Draw each segment (end points to 1/16 pixel) and a dot at each of its ends."""
     for line in lines:
-        ends = np.round([[line.x1, line.y1], [line.x2, line.y2]]).astype(int)
-        cv2.line(picture, tuple(ends[0]), tuple(ends[1]), RED, THICKNESS, cv2.LINE_AA)
+        ends = np.round(np.array([[line.x1, line.y1], [line.x2, line.y2]]) * 16).astype(int)
+        colour = line_colour(line)
+        cv2.line(picture, tuple(ends[0]), tuple(ends[1]), colour, THICKNESS, cv2.LINE_AA, 4)
+        for end in ends:
+            cv2.circle(picture, tuple(end), 3 * 16, colour, -1, cv2.LINE_AA, 4)
 
 
 def draw_matches(picture: np.ndarray, template: Template, matches: Iterable[Match]) -> None:

@@ -22,6 +22,32 @@ from numpy.typing import NDArray
 #: Sobel magnitude (raw 3x3 mask, grey levels) at which a pixel is an edge (thesis Sec. 5.2.2).
 DEFAULT_EDGE_THRESHOLD = 80.0
 
+#: The high hysteresis threshold of :func:`line_edges`: the gradient magnitude (3x3 Sobel of
+#: the smoothed image, compensated for magnification) a chain of edge pixels needs somewhere.
+#: About a 9-grey-level step after the smoothing (a sharp step of ``d`` levels gives ``4 d``
+#: unsmoothed, about ``2.8 d`` after a Gaussian of sigma 1).
+DEFAULT_LINE_THRESHOLD = 25.0
+
+#: Gaussian smoothing (sigma, pixels) of the grey image before the gradient: JPEG blocks and
+#: sensor noise of a few grey levels otherwise outweigh a faint edge.
+DEFAULT_SMOOTHING = 1.0
+
+#: Gaussian smoothing (sigma, pixels) of the gradient vector from which each pixel's
+#: orientation is taken (not its magnitude): on a faint edge the orientation of single pixels
+#: wanders by ten degrees and more, their mean along the edge does not.
+DEFAULT_ORIENTATION_SMOOTHING = 2.0
+
+#: Hysteresis of :func:`line_edges`: a chain of edge pixels needs one pixel at the high
+#: threshold (``edge_threshold``) and keeps its pixels down to this fraction of it.
+DEFAULT_LOW_RATIO = 0.4
+
+#: Pixels of the frontal view this close to the fill (no source pixel) give no edges: their
+#: 3x3 Sobel sees the fill, and bilinear sampling mixes the fill in one pixel further.
+FILL_MARGIN = 3
+
+#: The magnification compensation of :func:`line_edges` is capped at this factor.
+MAX_MAGNIFICATION = 4.0
+
 GreyImage = NDArray[np.uint8]
 
 
@@ -38,6 +64,25 @@ class EdgeMap:
     magnitude: NDArray[np.float32]
     orientation_deg: NDArray[np.float32]
     mask: NDArray[np.bool_]
+    #: Pixels that may carry an edge's weight in sub-pixel fits (``magnitude`` at least the
+    #: low hysteresis threshold, not thinned); None: the ``mask`` itself.
+    support: NDArray[np.bool_] | None = None
+    #: Weights of sub-pixel fits: the raw 3x3 Sobel magnitude of the unsmoothed image (its
+    #: profile across an edge is narrow); None: ``magnitude``.
+    weight: NDArray[np.float32] | None = None
+    #: The raw 3x3 Sobel ``(gx, gy)`` of the unsmoothed image, shape ``(2, height, width)``,
+    #: where segments' ends are looked for; None if not kept.
+    gradient: NDArray[np.float32] | None = None
+
+    @property
+    def support_mask(self) -> NDArray[np.bool_]:
+        """``support`` if set, else ``mask``."""
+        return self.mask if self.support is None else self.support
+
+    @property
+    def fit_weight(self) -> NDArray[np.float32]:
+        """``weight`` if set, else ``magnitude``."""
+        return self.magnitude if self.weight is None else self.weight
 
 
 def grey_image(image: np.ndarray) -> GreyImage:
@@ -77,6 +122,84 @@ def edge_map(image: np.ndarray, threshold: float = DEFAULT_EDGE_THRESHOLD) -> Ed
     mask = np.zeros((height, width), bool)
     mask[1:-1, 1:-1] = magnitude[1:-1, 1:-1] >= threshold
     return EdgeMap(magnitude, orientation, mask)
+
+
+def line_edges(
+    image: np.ndarray,
+    threshold: float = DEFAULT_LINE_THRESHOLD,
+    *,
+    low_ratio: float = DEFAULT_LOW_RATIO,
+    magnification: np.ndarray | None = None,
+    valid: np.ndarray | None = None,
+    smoothing: float = DEFAULT_SMOOTHING,
+    orientation_smoothing: float = DEFAULT_ORIENTATION_SMOOTHING,
+) -> EdgeMap:
+    """Thin hysteresis edges of a frontal view (Canny 1986 on the thesis's 3x3 Sobel gradient).
+
+    The raw ``cv2.Sobel`` gradient (a step of ``d`` grey levels gives ``4 d``, as in
+    :func:`edge_map`) is first multiplied by ``magnification`` (output pixels per source pixel
+    at each pixel, :func:`~gsrwt_cli.landmarks.frontal.magnification`; clipped to ``[1,``
+    :data:`MAX_MAGNIFICATION` ``]``): a rectification that stretches the far side of a wall
+    ``s`` times spreads each edge over ``s`` times more pixels and divides its gradient by
+    about ``s``, and so does it for the noise; the product is the gradient per source pixel.
+    Edge pixels (``mask``) are the local maxima of that magnitude across the edge
+    (non-maximum suppression) that are connected, through pixels of at least ``low_ratio *
+    threshold``, to a pixel of at least ``threshold`` (``cv2.Canny`` with the L2 norm): a
+    faint stretch of a white frame on a white wall is kept when the same edge is strong
+    elsewhere, an isolated faint texture pixel is not. ``support``: the pixels of at least
+    the low threshold within 2 px of an edge pixel (not thinned), for sub-pixel fits, whose
+    weights (``weight``) are the raw Sobel magnitude of the unsmoothed image.
+
+    ``valid``: the frontal pixels that have a source pixel; the gradient is zeroed within
+    :data:`FILL_MARGIN` pixels of the others, so the border with the fill gives no edges.
+    ``magnitude`` is the compensated one; ``orientation_deg`` as in :func:`edge_map`.
+    """
+    grey = grey_image(image)
+    height, width = grey.shape
+    if height < 3 or width < 3:
+        empty = np.zeros((height, width), np.float32)
+        nothing = np.zeros((height, width), bool)
+        return EdgeMap(empty, empty.copy(), nothing, nothing.copy(), empty.copy())
+    gradient_x = cv2.Sobel(grey, cv2.CV_32F, 1, 0, ksize=3)
+    gradient_y = cv2.Sobel(grey, cv2.CV_32F, 0, 1, ksize=3)
+    weight = cv2.magnitude(gradient_x, gradient_y)
+    raw_gradient = np.stack([gradient_x, gradient_y])
+    if smoothing > 0:  # the Sobel of the smoothed image is the smoothed Sobel
+        gradient_x = cv2.GaussianBlur(gradient_x, (0, 0), smoothing)
+        gradient_y = cv2.GaussianBlur(gradient_y, (0, 0), smoothing)
+    if magnification is not None:
+        gain = np.clip(np.asarray(magnification, np.float32), 1.0, MAX_MAGNIFICATION)
+        gradient_x *= gain
+        gradient_y *= gain
+    inside = np.zeros((height, width), np.uint8)
+    inside[1:-1, 1:-1] = 1
+    if valid is not None:
+        inside &= cv2.erode(np.asarray(valid, np.uint8), np.ones((3, 3), np.uint8),
+                            iterations=FILL_MARGIN, borderType=cv2.BORDER_CONSTANT,
+                            borderValue=1)
+        gradient_x *= inside
+        gradient_y *= inside
+    magnitude = cv2.magnitude(gradient_x, gradient_y)
+    if orientation_smoothing > 0:
+        direction_x = cv2.GaussianBlur(gradient_x, (0, 0), orientation_smoothing)
+        direction_y = cv2.GaussianBlur(gradient_y, (0, 0), orientation_smoothing)
+    else:
+        direction_x, direction_y = gradient_x, gradient_y
+    orientation = np.degrees(np.arctan2(direction_y, direction_x)).astype(np.float32)
+    orientation[orientation < 0] += np.float32(360.0)
+    orientation[orientation >= 360.0] = 0.0
+    low = float(threshold) * float(low_ratio)
+    limit = np.float32(32767.0)
+    dx = np.clip(np.rint(gradient_x), -limit, limit).astype(np.int16)
+    dy = np.clip(np.rint(gradient_y), -limit, limit).astype(np.int16)
+    mask = cv2.Canny(dx, dy, low, float(threshold), L2gradient=True) > 0
+    mask &= inside.astype(bool)
+    # Support: only near edge pixels (within 2 px), where segments' fits and gaps look.
+    near_edges = cv2.dilate(mask.astype(np.uint8), np.ones((5, 5), np.uint8)).astype(bool)
+    support = (magnitude >= low) & inside.astype(bool) & near_edges
+    weight *= inside
+    raw_gradient *= inside
+    return EdgeMap(magnitude, orientation, mask, support, weight, raw_gradient)
 
 
 def orientation_bin_count(step_deg: float) -> int:

@@ -17,11 +17,16 @@ from numpy.typing import NDArray
 
 from .edges import (
     DEFAULT_EDGE_THRESHOLD,
+    EdgeMap,
     bin_of_orientation,
     compatible_bins,
     edge_map,
     orientation_bin_count,
 )
+
+#: The high hysteresis threshold of :func:`~.edges.line_edges` with which ``gsrwt match`` finds
+#: the edges of templates and views.
+DEFAULT_MATCH_THRESHOLD = 25.0
 
 #: GHT R-table orientation bin width (degrees): wide enough that Sobel orientation noise on
 #: anti-aliased curves rarely moves a pixel by more than one bin.
@@ -71,17 +76,20 @@ def build_template(
     *,
     edge_threshold: float = DEFAULT_EDGE_THRESHOLD,
     orientation_step_deg: float = DEFAULT_GHT_ORIENTATION_STEP_DEG,
+    edges: EdgeMap | None = None,
 ) -> Template:
     """The GHT model of a cut-out bounding box (e.g. 40x100 for a knob, 120x90 for a window).
 
     As in the thesis (Sec. 5.2.2) every edge pixel inside the box (:func:`edge_map`; the
     1-pixel rim of the cut-out is left out, its gradient would see beyond the box) is part of
     the model, the reference point is the box centre, and entries are indexed by gradient
-    orientation in bins of ``orientation_step_deg``. Raises :class:`ValueError` if the box has
-    no edge pixels.
+    orientation in bins of ``orientation_step_deg``. ``edges``: the box's edge pixels from
+    another edge stage (e.g. :func:`~.edges.line_edges`), instead of :func:`edge_map` with
+    ``edge_threshold``. Raises :class:`ValueError` if the box has no edge pixels.
     """
     bin_count = orientation_bin_count(orientation_step_deg)
-    edges = edge_map(image, edge_threshold)
+    if edges is None:
+        edges = edge_map(image, edge_threshold)
     height, width = edges.mask.shape
     rows, cols = np.nonzero(edges.mask)
     if cols.size == 0:
@@ -128,6 +136,7 @@ def match_template(
     min_score: float = 0.0,
     max_matches: int = 5,
     orientation_tolerance_bins: int = 1,
+    edges: EdgeMap | None = None,
 ) -> list[Match]:
     """Find ``template`` in ``image`` with the Generalized Hough Transform (thesis Sec. 5.2.2).
 
@@ -162,13 +171,17 @@ def match_template(
     degrees costs few votes, and so do horizontal edges (90 and 270 deg are bin boundaries,
     as 4 does not divide 90). ``tol = 0`` casts a third of the votes (up to twice as fast);
     pair it with a bin width that divides 90 (e.g. 3, 5 or 6 degrees).
+
+    ``edges``: the image's edge pixels from another edge stage (the template's should come
+    from the same one), instead of :func:`edge_map` with ``edge_threshold``.
     """
     if orientation_tolerance_bins < 0:
         raise ValueError("orientation_tolerance_bins must not be negative")
     scale_values = np.asarray(list(scales), dtype=np.float64)
     if scale_values.size and not np.all(scale_values > 0):
         raise ValueError(f"scales must be positive, got {list(scales)}")
-    edges = edge_map(image, edge_threshold)
+    if edges is None:
+        edges = edge_map(image, edge_threshold)
     height, width = edges.mask.shape
     rows, cols = np.nonzero(edges.mask)
     if cols.size == 0 or scale_values.size == 0 or max_matches <= 0 or template.edge_count == 0:
