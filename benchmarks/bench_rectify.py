@@ -4,10 +4,11 @@ Four pipelines over the same directory of JPEGs, each as its own process tree wi
 number of worker processes, forked as gsrwt forks its workers, timed wall-clock:
 
 - ``gsrwt``: the real command, ``gsrwt rectify DIR --sidecar ... -o OUT --jobs P``;
-- ``floor``: OpenCV's decode and encode (``cv2.imdecode``/``cv2.imencode``, what
-  ``cv2.imread``/``cv2.imwrite`` do; quality 95) and an atomic write, with no warp;
+- ``floor``: the minimal script of the same OpenCV calls: decode (``cv2.imdecode``, what
+  ``cv2.imread`` does), one ``cv2.warpPerspective`` with gsrwt's homography into gsrwt's
+  frame, encode (quality 95), an atomic write;
 - ``best floor``: the same with the best decoder call found (libjpeg-turbo through
-  simplejpeg, straight to BGRA into reused memory);
+  simplejpeg, straight to BGRA into reused memory, warped as BGRA);
 - ``skimage``: OpenCV's I/O with ``skimage.transform.warp`` (bilinear, its 3x3 fast path).
 
 It prints images per second, the ratios gsrwt/floor (goal: at most 1.15; below 1 by using
@@ -16,7 +17,11 @@ skimage/gsrwt (goal: at least 5), and the peak memory of a gsrwt worker (its loo
 every image in a fresh process) above the same process idle, in units of one decoded image
 (goal: under 4).
 
+With ``--small N`` it compares gsrwt and the floors on N frames of 640x480 instead (goal:
+within 1.10x of the floor).
+
     python benchmarks/bench_rectify.py [--images 64] [--jobs N] [--repeat 3] [--keep DIR]
+    python benchmarks/bench_rectify.py --small 2000
 """
 
 from __future__ import annotations
@@ -98,7 +103,7 @@ def write_lens_sidecars(folder: Path) -> tuple[Path, Path]:
     columns = "image,pan,tilt,focal,distortion_model," + ",".join(LENS)
     coefficients = ",".join(str(v) for v in LENS.values())
     repeated, distinct = [columns], [columns]
-    for index, (path, pan, tilt) in enumerate(_views(folder)):
+    for index, (path, pan, tilt, _) in enumerate(_views(folder)):
         repeated.append(f"{path.name},{pan},{tilt},{FOCAL},plumb_bob,{coefficients}")
         distinct.append(f"{path.name},{pan + 0.01 * index},{tilt},{FOCAL},plumb_bob,"
                         f"{coefficients}")
@@ -108,10 +113,22 @@ def write_lens_sidecars(folder: Path) -> tuple[Path, Path]:
     return paths
 
 
-def _views(folder: Path) -> list[tuple[Path, float, float]]:
-    rows = (folder / "views.csv").read_text().splitlines()[1:]  # pan, tilt: the 2nd, 3rd
+def _views(folder: Path) -> list[tuple[Path, float, float, float]]:
+    """(image, pan, tilt, focal) of every row of the folder's ``views.csv``."""
+    rows = (folder / "views.csv").read_text().splitlines()[1:]
     cells = [row.split(",") for row in rows]
-    return [(folder / c[0], float(c[1]), float(c[2])) for c in cells]
+    return [(folder / c[0], float(c[1]), float(c[2]), float(c[3])) for c in cells]
+
+
+def _task(path: Path, out: Path, pan: float, tilt: float, focal: float) -> tuple:
+    """A floor's task: the image, its output, and the homography and size of gsrwt's frame."""
+    from gsrwt_cli import View
+    from gsrwt_cli.imaging import image_file_size
+    from gsrwt_cli.rectify import plan_image
+
+    width, height = image_file_size(path)
+    plan = plan_image(View(pan, tilt, focal), width, height)
+    return str(path), str(out / path.name), plan.homography, plan.size
 
 
 _buffer = np.empty(0, np.uint8)
@@ -145,30 +162,25 @@ def _write(target: str, image: np.ndarray) -> None:
     write_atomic(target, encoded.tobytes())
 
 
-def _floor_one(task: tuple[str, str]) -> None:
-    source, target = task
-    _write(target, _read(source))
+def _floor_one(task: tuple) -> None:
+    """The minimal script of the same OpenCV calls: decode, one warp, encode, write."""
+    source, target, homography, size = task
+    _write(target, cv2.warpPerspective(_read(source), homography, size))
 
 
-def _best_floor_one(task: tuple[str, str]) -> None:
-    source, target = task
-    _write(target, _read_best(source))
+def _best_floor_one(task: tuple) -> None:
+    source, target, homography, size = task
+    _write(target, cv2.warpPerspective(_read_best(source), homography, size))
 
 
-def _skimage_one(task: tuple[str, str, float, float]) -> None:
-    from skimage.transform import ProjectiveTransform, warp
+def _skimage_one(task: tuple) -> None:
+    from skimage.transform import warp
 
-    from gsrwt_cli import View
-    from gsrwt_cli.framing import output_from_input
-
-    source, target, pan, tilt = task
-    image = _read(source)
-    height, width = image.shape[:2]
-    homography = output_from_input(View(pan, tilt, FOCAL, width=width, height=height))
+    source, target, homography, (width, height) = task
     # skimage's inverse_map takes output (col, row) to input (col, row), like OpenCV's.
     # The 3x3 matrix itself: warp's fast path (a callable would be called per pixel block).
-    inverse = ProjectiveTransform(matrix=np.linalg.inv(homography)).params
-    warped = warp(image, inverse, output_shape=image.shape, order=1, preserve_range=True)
+    warped = warp(_read(source), np.linalg.inv(homography), output_shape=(height, width),
+                  order=1, preserve_range=True)
     _write(target, warped.astype(np.uint8))
 
 
@@ -183,13 +195,8 @@ def _init(threads: int) -> None:
 def run_pool(stage: str, folder: Path, out: Path, jobs: int) -> None:
     """Entry point of the floor and skimage pipelines (run in their own process)."""
     out.mkdir(parents=True, exist_ok=True)
-    views = _views(folder)
-    if stage in ("floor", "best-floor"):
-        tasks = [(str(p), str(out / p.name)) for p, _, _ in views]
-        work = _floor_one if stage == "floor" else _best_floor_one
-    else:
-        tasks = [(str(p), str(out / p.name), pan, tilt) for p, pan, tilt in views]
-        work = _skimage_one
+    tasks = [_task(path, out, pan, tilt, focal) for path, pan, tilt, focal in _views(folder)]
+    work = {"floor": _floor_one, "best-floor": _best_floor_one, "skimage": _skimage_one}[stage]
     # Started as gsrwt starts its workers: forked from a process that has run no OpenCV code.
     context = multiprocessing.get_context("fork")
     with context.Pool(jobs, initializer=_init, initargs=(1 if jobs > 1 else 0,)) as pool:
@@ -217,7 +224,7 @@ def worker_memory(folder: Path, out: Path) -> None:
 
     worker = ImageWorker.in_own_process(Settings(overwrite=True), opencv_threads=1)
     idle = high_water_kib()
-    for path, pan, tilt in _views(folder):
+    for path, pan, tilt, _ in _views(folder):
         job = Job(path, out / path.name, {"pan": pan, "tilt": tilt, "focal": FOCAL}, "bench")
         assert worker(job)["status"] == "ok"
     print(idle, high_water_kib())

@@ -1,10 +1,12 @@
 """Run one function over many items in worker processes that may die, and stop cleanly.
 
-:class:`ProcessExecutor` hands items to workers one at a time over a pipe each and watches
+:class:`ProcessExecutor` hands items to workers over a pipe each, :data:`ITEMS_IN_FLIGHT` at
+a time (so that a worker never waits for the parent between two small images), and watches
 every worker's process sentinel, so that:
 
 - a worker that dies (kill -9, the OOM killer, a crash in a codec) costs only the item it was
-  working on, which is reported through ``on_death``; a fresh worker takes its place;
+  working on, which is reported through ``on_death``; the items queued behind it go to other
+  workers, and a fresh worker takes its place;
 - a parent that dies takes its workers with it: a worker exits quietly when its pipe closes,
   and on Linux the kernel sends it SIGTERM when its parent goes (``PR_SET_PDEATHSIG``);
 - stopping (an exception in the caller: Ctrl-C, SIGTERM, a closed pipe) ends every worker
@@ -25,7 +27,7 @@ import signal
 import sys
 from collections import deque
 from collections.abc import Callable, Iterator, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from multiprocessing.connection import Connection, wait
 from typing import Any, Generic, Protocol, TypeVar
 
@@ -34,6 +36,9 @@ Result = TypeVar("Result")
 
 #: Seconds a worker is given to end after SIGTERM before it is killed.
 STOP_GRACE_SECONDS = 5.0
+#: Items sent to a worker ahead of its results: the next is in its pipe when it finishes one
+#: (a 640x480 frame takes 4 ms; a round trip through the parent, up to a scheduling delay).
+ITEMS_IN_FLIGHT = 2
 
 
 def death_reason(exitcode: int | None) -> str:
@@ -100,7 +105,8 @@ class Executor(Protocol[Item, Result]):
 class _Worker:
     process: multiprocessing.process.BaseProcess
     connection: Connection
-    busy_with: int | None = None  # the index of the item in flight
+    #: The indices of the items sent, in order: the first is the one being worked on.
+    in_flight: deque[int] = field(default_factory=deque)
 
 
 class ProcessExecutor(Generic[Item, Result]):
@@ -148,35 +154,38 @@ class ProcessExecutor(Generic[Item, Result]):
         queue = deque(range(len(items)))
         workers: list[_Worker] = []
 
-        def dispatch(worker: _Worker) -> None:
-            worker.busy_with = queue.popleft() if queue else None
-            if worker.busy_with is not None:
+        def dispatch(worker: _Worker, up_to: int = ITEMS_IN_FLIGHT) -> None:
+            while queue and len(worker.in_flight) < up_to:
+                worker.in_flight.append(queue.popleft())
                 # A worker that died since its last result breaks the pipe: its sentinel
                 # then reports the death, and the item is reported with it.
                 with contextlib.suppress(OSError):
-                    worker.connection.send(items[worker.busy_with])
+                    worker.connection.send(items[worker.in_flight[-1]])
 
         try:
             for _ in range(min(self.processes, len(items))):
                 workers.append(self._start())
-                dispatch(workers[-1])
-            while any(worker.busy_with is not None for worker in workers):
-                busy = [worker for worker in workers if worker.busy_with is not None]
+            for up_to in range(1, ITEMS_IN_FLIGHT + 1):  # each its first item, then its second
+                for worker in workers:
+                    dispatch(worker, up_to)
+            while any(worker.in_flight for worker in workers):
+                busy = [worker for worker in workers if worker.in_flight]
                 ready = set(wait([w.connection for w in busy] + [w.process.sentinel for w in busy]))
                 for worker in busy:
-                    index = worker.busy_with
-                    assert index is not None
+                    index = worker.in_flight[0]
                     if worker.connection in ready or worker.connection.poll():
                         try:
                             result = worker.connection.recv()
                         except (EOFError, OSError):
                             result = None
                         else:
+                            worker.in_flight.popleft()
                             dispatch(worker)
                             yield index, result
                             continue
                     if worker.connection in ready or worker.process.sentinel in ready:
-                        # No result, and the process ended (or its pipe broke): it died.
+                        # No result, and the process ended (or its pipe broke): it died on
+                        # its first item; the ones behind it were never started.
                         worker.process.join(STOP_GRACE_SECONDS)
                         reason = death_reason(worker.process.exitcode)
                         self.deaths += 1
@@ -184,17 +193,21 @@ class ProcessExecutor(Generic[Item, Result]):
                             self.on_abandon(items[index], worker.process.pid)
                         worker.connection.close()
                         workers.remove(worker)
+                        worker.in_flight.popleft()
+                        queue.extendleft(reversed(worker.in_flight))
                         yield index, self.on_death(items[index], reason)
                         if queue:
                             workers.append(self._start())
                             dispatch(workers[-1])
+                        for other in workers:  # items put back go to whoever has room
+                            dispatch(other)
         finally:
             self._stop(workers, items)
 
     def _stop(self, workers: list[_Worker], items: Sequence[Item]) -> None:
         """End every worker: politely if idle, with SIGTERM (then SIGKILL) if busy."""
         for worker in workers:
-            if worker.busy_with is None:
+            if not worker.in_flight:
                 with contextlib.suppress(OSError):
                     worker.connection.send(None)
             elif worker.process.is_alive():
@@ -205,6 +218,7 @@ class ProcessExecutor(Generic[Item, Result]):
                 worker.process.kill()
                 worker.process.join()
             pid = worker.process.pid
-            if worker.busy_with is not None and self.on_abandon is not None and pid is not None:
-                self.on_abandon(items[worker.busy_with], pid)
+            if self.on_abandon is not None and pid is not None:
+                for index in worker.in_flight:
+                    self.on_abandon(items[index], pid)
             worker.connection.close()

@@ -1,0 +1,45 @@
+"""The process executor on its own: items in flight, deaths, and what is put back."""
+
+from __future__ import annotations
+
+import multiprocessing
+import os
+import signal
+import time
+
+import pytest
+
+from gsrwt_cli.executor import ITEMS_IN_FLIGHT, ProcessExecutor
+
+
+def _make_worker(deadly: frozenset[int]):
+    def work(item: int) -> tuple[int, int]:
+        if item in deadly:
+            os.kill(os.getpid(), signal.SIGKILL)
+        time.sleep(0.002)  # a small image's worth of work
+        return item * item, os.getpid()
+    return work
+
+
+@pytest.mark.parametrize("processes", [1, 2, 3])
+def test_every_item_once_when_workers_die_with_items_queued_behind(processes):
+    """Workers get items ahead (ITEMS_IN_FLIGHT): one killed on an item costs that item
+    only; the items queued behind it are done by other (or fresh) workers, each once."""
+    assert ITEMS_IN_FLIGHT >= 2
+    items = list(range(40))
+    deadly = frozenset({3, 4, 17, 39})  # 3 and 4 back to back: a queued item dies too
+    deaths: list[int] = []
+    executor = ProcessExecutor(
+        _make_worker, (deadly,), processes,
+        on_death=lambda item, reason: deaths.append(item) or ("died", reason),
+        context=multiprocessing.get_context("fork"))
+    results = dict(executor.map_unordered(items))
+    assert sorted(results) == items
+    assert sorted(deaths) == sorted(deadly) and executor.deaths == len(deadly)
+    for item in items:
+        if item in deadly:
+            assert results[item] == ("died", "worker died: signal 9 (SIGKILL)")
+        else:
+            assert results[item][0] == item * item
+    if processes > 1:  # the work was shared
+        assert len({result[1] for item, result in results.items() if item not in deadly}) > 1
