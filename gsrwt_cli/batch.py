@@ -49,6 +49,8 @@ from .storage import Location, fetched, is_url, open_input
 RECTIFY_COLUMNS = (
     *PARAMS_COLUMNS,
     "focal_source",
+    "pose_source",
+    "confidence",
     "output",
     "out_width",
     "out_height",
@@ -74,6 +76,9 @@ class Job:
     where: str  # where the parameters came from, for messages
     error: str | None = None  # known before reading the image
     existed: bool = False  # the output existed when the run began
+    #: sidecar, yaml, options, or estimated (from the image: ``rectify --auto``)
+    pose_source: str | None = None
+    estimate: Any = None  # the EstimateOptions of an estimated pose
 
 
 #: A function that words an error for the user, or returns None for the error's own text.
@@ -109,8 +114,12 @@ def plan_jobs(
     sidecar: Sidecar | None,
     fallback: dict[str, Any],
     extension: str | None,
+    auto: Any = None,
 ) -> list[Job]:
     """One job per source; outputs mirror relative paths under ``outdir``.
+
+    ``auto``: the :class:`~gsrwt_cli.estimation.EstimateOptions` of images whose pose no
+    source gives (``rectify --auto``): their pose is estimated from the image.
 
     An output whose directory leads out of ``outdir`` (through a symbolic link) is an error
     of its job, as is an output that another job also claims.
@@ -124,9 +133,11 @@ def plan_jobs(
         if extension is not None:
             relative = relative.with_suffix(extension)
         output = outdir / relative
-        match resolve_parameters(source.path, source.relative, sidecar, fallback):
-            case Found(values=values, where=where):
-                error = None
+        pose_source = None
+        match resolve_parameters(source.path, source.relative, sidecar, fallback,
+                                 estimate=auto is not None):
+            case Found(values=values, where=where, origin=origin):
+                error, pose_source = None, origin.value.replace("adjacent ", "")
             case Problem(message=error, where=where):
                 values = None
             case NotFound() as missing:
@@ -143,7 +154,8 @@ def plan_jobs(
             existed = error is None and str(output) in present
         else:
             existed = error is None and os.path.lexists(output)
-        jobs.append(Job(source.path, output, values, where, error, existed))
+        jobs.append(Job(source.path, output, values, where, error, existed, pose_source,
+                        auto if pose_source == "estimated" else None))
     return jobs
 
 
@@ -183,11 +195,25 @@ def focal_source(values: Mapping[str, Any], where: str) -> str | None:
     return None
 
 
-def _view(job: Job) -> tuple[View, str]:
-    """The job's view and where its focal length came from (EXIF read here if needed)."""
+def _view(job: Job, estimate: bool = True) -> tuple[View, str, dict[str, Any]]:
+    """The job's view, where its focal length came from (EXIF read here if needed) and its
+    ``pose_source`` and ``confidence`` columns; an estimated pose is estimated here (unless
+    not ``estimate``: then it is an error)."""
     if job.error is not None:
         raise _JobError(job.error)
     assert job.values is not None
+    if job.pose_source == "estimated":
+        if not estimate:
+            raise _JobError("its pose was not estimated")
+        from .estimation import estimated_view_values  # the estimator, only when asked for
+
+        values, found, confidence = estimated_view_values(job.source, job.values, job.where,
+                                                          job.estimate)
+        try:
+            view = view_from_values(values, job.where)
+        except RecordError as error:
+            raise _JobError(str(error)) from None
+        return view, found, {"pose_source": "estimated", "confidence": confidence}
     values, source = dict(job.values), focal_source(job.values, job.where)
     if values.get("focal_mm") not in (None, "") and values.get("width") in (None, ""):
         size = image_file_size(job.source)  # millimetres become pixels with the image's size
@@ -203,7 +229,7 @@ def _view(job: Job) -> tuple[View, str]:
         values["fx"], values["fy"] = found.fx, found.fy
         source = "exif"
     try:
-        return view_from_values(values, job.where), source
+        return view_from_values(values, job.where), source, {"pose_source": job.pose_source}
     except RecordError as error:
         raise _JobError(str(error)) from None
 
@@ -249,8 +275,8 @@ def process_job(job: Job, settings: Settings, scratch: Scratch | None = None) ->
     try:
         with np.errstate(all="ignore"), warnings.catch_warnings(), fetched(job.source):
             warnings.simplefilter("ignore")
-            view, source = _view(job)
-            row.update(params_row(view, str(job.source)), focal_source=source)
+            view, source, pose = _view(job)
+            row.update(params_row(view, str(job.source)), focal_source=source, **pose)
             if job.output.exists() and not settings.overwrite:
                 # Written since the run began: by this run's own earlier try of the job
                 # (a worker that died after writing it, its task run again), so done.
@@ -289,8 +315,8 @@ def record_row(job: Job, settings: Settings, status: str = "skipped") -> dict[st
     row: dict[str, Any] = {"image": str(job.source), "output": str(job.output)}
     try:
         with np.errstate(all="ignore"):
-            view, source = _view(job)
-            row.update(params_row(view, str(job.source)), focal_source=source)
+            view, source, pose = _view(job)
+            row.update(params_row(view, str(job.source)), focal_source=source, **pose)
             size = measure_image_file(job.source, settings.max_input_pixels)
             info = _plan(view, size[0], size[1], settings)
         row.update(_geometry(info), image=str(job.source), status=status)
@@ -310,8 +336,8 @@ def died_row(job: Job, reason: str) -> dict[str, Any]:
     """The row of an image whose worker died while working on it."""
     row: dict[str, Any] = {"image": str(job.source), "output": str(job.output)}
     with contextlib.suppress(Exception), np.errstate(all="ignore"):
-        view, source = _view(job)
-        row.update(params_row(view, str(job.source)), focal_source=source)
+        view, source, pose = _view(job, estimate=False)
+        row.update(params_row(view, str(job.source)), focal_source=source, **pose)
     row.update(status="error", error=reason)
     return row
 

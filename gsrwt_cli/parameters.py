@@ -9,8 +9,9 @@ Sources, first match wins (fields it leaves out come from its defaults, then the
 3. the options (``--pan``, ``--tilt``, ``--focal`` at least).
 
 The result is typed: :class:`Found` (values and where they came from), :class:`NotFound`
-(the places looked at) or :class:`Problem` (a message naming its place). A fourth source
-(a pose estimated from the image) becomes one more step in :func:`resolve_parameters`.
+(the places looked at) or :class:`Problem` (a message naming its place). A fourth source,
+asked for with ``estimate``: a pose estimated from the image, when no other source gives one
+(``Origin.ESTIMATED``; the estimate itself is made where the image is read).
 """
 
 from __future__ import annotations
@@ -36,6 +37,8 @@ from .sidecar import (
 #: The options that alone make a view: the pose; the focal length may come from --focal,
 #: --fx/--fy, a --camera file or the image's EXIF.
 REQUIRED_OPTIONS = ("pan", "tilt")
+#: Fields that give a pose: pan/tilt, the GS-RWT's delta/a, solvePnP's rvec, a quaternion.
+POSE_GIVERS = ("pan", "tilt", "delta", "a", "rvec_x", "qw")
 
 
 class Origin(enum.Enum):
@@ -44,6 +47,9 @@ class Origin(enum.Enum):
     SIDECAR = "sidecar"
     ADJACENT_YAML = "adjacent yaml"
     OPTIONS = "options"
+    #: no source gives a pose: the values (intrinsics) are the options', and the pose is to
+    #: be estimated from the image (``rectify --auto``, :mod:`~gsrwt_cli.estimation`)
+    ESTIMATED = "estimated"
 
 
 @dataclass(frozen=True)
@@ -103,13 +109,26 @@ def resolve_parameters(
     relative: PurePosixPath | str,
     sidecar: Sidecar | None,
     fallback: Mapping[str, Any],
+    estimate: bool = False,
 ) -> Parameters:
     """The parameters of ``image`` (``relative``: its path as a sidecar names it).
 
     ``fallback``: values from the options, which fill fields that the source leaves out
     and are the last source themselves when they give at least :data:`REQUIRED_OPTIONS`.
+    ``estimate``: an image that no source gives a pose (:data:`POSE_GIVERS`) is
+    ``Found`` with ``Origin.ESTIMATED`` and the values that source (or the options) gives.
     """
-    fallback = dict(fallback)
+    found = _resolve(image, relative, sidecar, dict(fallback))
+    if estimate and isinstance(found, NotFound):
+        return Found(dict(fallback), "options", Origin.ESTIMATED)
+    if estimate and isinstance(found, Found) and not any(
+            found.values.get(name) not in (None, "") for name in POSE_GIVERS):
+        return Found(found.values, found.where, Origin.ESTIMATED)
+    return found
+
+
+def _resolve(image: Path, relative: PurePosixPath | str, sidecar: Sidecar | None,
+             fallback: dict[str, Any]) -> Parameters:
     if sidecar is not None:
         try:
             record = sidecar.find(PurePosixPath(relative).as_posix())

@@ -70,6 +70,8 @@ def internal_error_message(error: BaseException) -> str:
 #: module, and what it imports, is loaded only when that command is used, so that
 #: ``gsrwt --version``, ``gsrwt --help`` and the light commands start fast.
 COMMANDS: dict[str, tuple[str, str]] = {
+    "estimate": ("estimate", "Estimate pan, tilt and roll of each image from its straight lines "
+                             "(spec section 7)."),
     "gaze": ("gaze", "Pan and tilt that centre a target seen on the canonical view, or, with "
                      "no target, the wall point the camera looks at."),
     "lines": ("landmarks", "Straight segments (door boundaries) by the Hough transform on frontal "

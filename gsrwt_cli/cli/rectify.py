@@ -36,6 +36,8 @@ from ..batch import (
     worker_context,
 )
 from ..calibration import CalibrationError
+from ..estimate import WALL_CHOICES
+from ..estimation import EstimateOptions
 from ..framing import NothingWithinStretchError, OutputTooLargeError
 from ..imaging import (
     INTERPOLATIONS,
@@ -405,19 +407,29 @@ def dask_executor(address: str, processes: int, retries: int,
                    "jobs, CI matrices); the table is OUTDIR/gsrwt.K-of-N.csv; join the "
                    "tables with 'gsrwt tables merge'.")
 @click.option("-q", "--quiet", is_flag=True, help="No progress bar and no summary.")
+@click.option("--auto", is_flag=True,
+              help="Estimate the pose of images that no source gives pan and tilt for, from "
+                   "their own lines (as 'gsrwt estimate'; the focal length too if unknown).")
+@click.option("--min-confidence", type=click.FloatRange(0, 1), default=0.0, show_default=True,
+              help="With --auto: estimates less confident than this (0-1) are errors.")
+@click.option("--wall", type=click.Choice(WALL_CHOICES), default="frontal", show_default=True,
+              help="With --auto: the wall is the most frontal vertical plane (|pan| <= 45) or "
+                   "the one with the most horizontal edges.")
 def rectify(
     inputs: tuple[str, ...], outdir: Path, recursive: bool, sidecar: Path | None, bbox: str,
     max_stretch: float, scale: float | None, px_per_unit: float | None, max_pixels: str,
     interpolation: str, fill: float, alpha: bool, ext: str | None, quality: int,
     table_path: str | None, jobs: int | None, overwrite: bool, dry_run: bool, quiet: bool,
     max_input_pixels: str, antialias: bool, max_size: str | None, shard: str | None,
-    scheduler: str | None, retries: int, **view_kwargs: Any,
+    scheduler: str | None, retries: int, auto: bool, min_confidence: float, wall: str,
+    **view_kwargs: Any,
 ) -> None:
     """Rectify images into canonical frontal views of the wall they show (GS-RWT).
 
     INPUT is an image, a directory of images, or - to read paths from standard input.
     Parameters per image come from the first of: a row of --sidecar, a NAME.yaml beside
-    the image, the --pan/--tilt/--focal options. Existing outputs are skipped (rerun to
+    the image, the --pan/--tilt/--focal options; with --auto, the pose of the rest is
+    estimated from the image. Existing outputs are skipped (rerun to
     resume); every output is written whole or not at all. Exit code 1 if any image failed.
 
     \b
@@ -474,7 +486,9 @@ def rectify(
     sources, unreadable = collect_sources(inputs, recursive)
     if not sources and not unreadable:
         raise InputError(f"no images found in {' '.join(inputs)}")
-    job_list = plan_jobs(sources, outdir, loaded, view_defaults(view_kwargs), extension)
+    estimating = EstimateOptions(min_confidence, wall, input_pixel_limit) if auto else None
+    job_list = plan_jobs(sources, outdir, loaded, view_defaults(view_kwargs), extension,
+                         estimating)
     for camera in sorted({str(job.values["camera"]) for job in job_list
                           if job.values and job.values.get("camera")}):
         try:  # a bad calibration file is a usage error, found before any image is read

@@ -1,0 +1,190 @@
+"""``gsrwt estimate``: pan, tilt and roll of each image from its own lines, as sidecar rows."""
+
+from __future__ import annotations
+
+import os
+import sys
+from pathlib import Path, PurePosixPath
+from typing import Any
+
+import click
+from tqdm import tqdm
+
+from ..calibration import CalibrationError
+from ..estimate import WALL_CHOICES
+from ..estimation import ESTIMATE_COLUMNS, EstimateJob, EstimateOptions, run_estimates
+from ..messages import one_line
+from ..records import load_camera_file
+from ..sidecar import SidecarError, display_path, load_sidecar
+from ..tables import FORMATS, TableWriter, format_from_extension
+from ..targets import Drawings
+from .options import (
+    InputError,
+    make_output_directory,
+    report_error,
+    resolve_format,
+    view_defaults,
+)
+from .rectify import (
+    Terminated,
+    collect_sources,
+    open_table,
+    parse_pixel_count,
+    stop_on_signals,
+)
+
+#: The camera options of ``estimate`` (a pose is what it finds, so no --pan/--tilt/--roll).
+CAMERA_OPTIONS = {
+    "focal": (float, "Focal length in pixels (fx = fy) [default: from --camera, the sidecar, "
+                     "EXIF, else estimated from the image]."),
+    "fx": (float, "Horizontal focal length in pixels (with --fy)."),
+    "fy": (float, "Vertical focal length in pixels (with --fx)."),
+    "cx": (float, "Principal point column [default: image centre]."),
+    "cy": (float, "Principal point row [default: image centre]."),
+}
+
+
+def camera_options(func):  # type: ignore[no-untyped-def]
+    for name in reversed(CAMERA_OPTIONS):
+        kind, text = CAMERA_OPTIONS[name]
+        func = click.option(f"--{name}", type=kind, help=text)(func)
+    return click.option(
+        "--camera", type=click.Path(dir_okay=False),
+        help="Calibration file (OpenCV YAML/XML or ROS camera_info): intrinsics and lens "
+             "(the lens is removed from the segments' end points).")(func)
+
+
+@click.command()
+@click.argument("inputs", nargs=-1, required=True, metavar="INPUT...")
+@click.option("-o", "--output", "output", default=None,
+              help="Write the table to this file (.csv, .tsv, .json, .jsonl, .md) instead of "
+                   "stdout; it is a sidecar for 'gsrwt rectify --sidecar'.")
+@click.option("--format", "-f", "fmt", type=click.Choice(FORMATS), default=None,
+              help="Table format [default: from -o's extension; on stdout table on a "
+                   "terminal, csv in a pipe].")
+@click.option("-r", "--recursive", is_flag=True, help="Descend into directories.")
+@click.option("--sidecar", type=click.Path(path_type=Path, dir_okay=False),
+              help="CSV or YAML of per-image intrinsics (focal, cx, cy, camera, lens); any "
+                   "pose in it is ignored.")
+@camera_options
+@click.option("--min-confidence", type=click.FloatRange(0, 1), default=0.0, show_default=True,
+              help="Estimates less confident than this (0-1) are errors.")
+@click.option("--wall", type=click.Choice(WALL_CHOICES), default="frontal", show_default=True,
+              help="Which vertical plane is the wall: the most frontal (|pan| <= 45) or the "
+                   "one with the most horizontal edges.")
+@click.option("--draw", type=click.Path(path_type=Path, file_okay=False),
+              help="Write a picture per image (DIR/NAME.png): segments by direction, the "
+                   "horizon, the frontal view's outline.")
+@click.option("--max-input-pixels", default="300M", show_default=True,
+              help="Refuse, before decoding it, an input whose header claims more pixels.")
+@click.option("-j", "--jobs", type=click.IntRange(min=1), default=None,
+              help="Worker processes [default: all cores].")
+@click.option("-q", "--quiet", is_flag=True, help="No summary on stderr.")
+def estimate(inputs: tuple[str, ...], output: str | None, fmt: str | None, recursive: bool,
+             sidecar: Path | None, min_confidence: float, wall: str, draw: Path | None,
+             max_input_pixels: str, jobs: int | None, quiet: bool, **camera: Any) -> None:
+    """Estimate pan, tilt and roll of each image from its straight lines (spec section 7).
+
+    Writes one sidecar row per image: image, pan, tilt, roll, focal, cx, cy, width,
+    height (what 'gsrwt rectify --sidecar' reads), then confidence, segments, inliers,
+    focal_source, the three vanishing points in pixels, status and error. Images that
+    cannot tell their pose get status error and no pose. Exit code 1 if any failed.
+
+    \b
+    Examples:
+      gsrwt estimate sample_data/views/door_p20_t-8_f800.jpg --focal 800
+      gsrwt estimate sample_data/views --sidecar sample_data/views/views.csv -o poses.csv
+    """
+    fork_workers = getattr(click.get_current_context().find_root().obj, "fork_workers", False)
+    input_pixel_limit = parse_pixel_count(max_input_pixels, "--max-input-pixels")
+    if output is not None and output != "-":
+        table_format = fmt or format_from_extension(output) or ""
+        if table_format not in FORMATS or table_format == "table" and fmt is None:
+            raise click.BadParameter("the table's name must end in .csv, .tsv, .json, .jsonl "
+                                     "or .md, or give --format", param_hint="'-o'")
+    else:
+        table_format, output = resolve_format(fmt), "-"
+    loaded = None
+    if sidecar is not None:
+        try:
+            loaded = load_sidecar(sidecar)
+        except SidecarError as error:
+            raise InputError(str(error)) from None
+    if camera.get("camera"):
+        try:
+            load_camera_file(str(camera["camera"]))
+        except CalibrationError as error:
+            raise InputError(str(error)) from None
+    sources, unreadable = collect_sources(inputs, recursive)
+    if not sources and not unreadable:
+        raise InputError(f"no images found in {' '.join(inputs)}")
+    given = {os.path.realpath(source.path) for source in sources}
+    if sidecar is not None:
+        given.add(os.path.realpath(sidecar))
+    if output != "-" and os.path.realpath(output) in given:
+        raise InputError(f"-o {output}: would overwrite an input; choose another path")
+    drawings = None
+    if draw is not None:
+        make_output_directory("--draw", draw)
+        drawings = Drawings(draw, [source.path for source in sources]
+                            + ([sidecar] if sidecar else []))
+    fallback = view_defaults(camera)
+    job_list = []
+    for source in sources:
+        values, where, error = dict(fallback), "options", None
+        if loaded is not None:
+            try:
+                record = loaded.find(PurePosixPath(source.relative).as_posix())
+            except SidecarError as problem:
+                record, error = None, str(problem)
+            if record is not None:
+                values, where = record.merged(fallback), record.where
+        picture = None
+        if drawings is not None and error is None:
+            try:
+                picture = drawings.target(source.path)
+            except ValueError as problem:
+                error = f"--draw: {problem}"
+        job_list.append(EstimateJob(source.path, PurePosixPath(source.relative).as_posix(),
+                                    values, where, picture, error))
+    options = EstimateOptions(min_confidence, wall, input_pixel_limit)
+    for problem in unreadable:
+        report_error(problem)
+    counts = {"ok": 0, "failed": len(unreadable), "interrupted": 0}
+    stopped: BaseException | None = None
+    tqdm.monitor_interval = 0  # no monitor thread: workers may fork from this process
+    progress = tqdm(total=len(job_list), unit="img", file=sys.stderr, dynamic_ncols=True,
+                    disable=quiet or not sys.stderr.isatty())
+    with stop_on_signals(), open_table(output) as stream:
+        writer = TableWriter(stream, ESTIMATE_COLUMNS, table_format)
+
+        def on_row(row: dict[str, Any]) -> None:
+            writer.write_row(row)
+            if row.get("status") == "ok":
+                counts["ok"] += 1
+            elif row.get("status") == "interrupted":
+                counts["interrupted"] += 1
+            else:
+                counts["failed"] += 1
+                progress.write(f"Error: {one_line(row['image'])}: {row.get('error')}",
+                               file=sys.stderr)
+
+        try:
+            run_estimates(job_list, options, jobs or os.cpu_count() or 1, on_row,
+                          picture_root=draw, fork_from_caller=fork_workers,
+                          on_progress=lambda: progress.update(1))
+        except (KeyboardInterrupt, Terminated) as stop:
+            stopped = stop  # every job has its row: the table is still written whole
+        finally:
+            progress.close()
+        writer.close()
+    if not quiet:
+        where = "" if output == "-" else f"; table: {display_path(output)}"
+        summary = f"{counts['ok']} estimated, {counts['failed']} failed"
+        if stopped is not None:
+            summary = f"interrupted: {summary}, {counts['interrupted']} not done"
+        click.echo(f"gsrwt: {summary}{where}", err=True)
+    if stopped is not None:
+        sys.exit(143 if isinstance(stopped, Terminated) else 130)
+    if counts["failed"]:
+        sys.exit(1)
