@@ -31,7 +31,6 @@ from .imaging import (
     ImageError,
     Scratch,
     check_writable,
-    encode_image,
     image_file_size,
     keep_freed_memory,
     measure_image_file,
@@ -297,7 +296,7 @@ def process_job(job: Job, settings: Settings, scratch: Scratch | None = None) ->
                     info.pixel_map, settings.interpolation, settings.fill, settings.alpha,
                     settings.antialias,
                 )
-                encoded = encode_image(warped, job.output.suffix, settings.quality)
+                encoded = scratch.encode(warped, job.output.suffix, settings.quality)
                 del warped
                 write_atomic(job.output, encoded, root=settings.root)
         row.update(_geometry(info), image=str(job.source), status="ok")

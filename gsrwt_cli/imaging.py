@@ -449,6 +449,7 @@ class Scratch:
         self._regions: list[np.ndarray] = [np.empty(0, np.uint8), np.empty(0, np.uint8)]
         self._decoded: np.ndarray | None = None
         self._padded = False  # the decoded image is a JPEG's BGRA, fourth channel opaque
+        self._icc = b""  # the ICC profile segments of the JPEG read, for its JPEG output
 
     def array(self, region: int, shape: tuple[int, ...], dtype: np.dtype) -> np.ndarray:
         """An uninitialized array of ``shape`` and ``dtype`` in ``region`` (0 or 1)."""
@@ -464,8 +465,11 @@ class Scratch:
 
         The previous image is dropped first, so a failure never leaves its pixels behind.
         """
+        from .jpeg_stream import icc_segments
+
         self._decoded, self._padded = None, False
         data = read_file_bytes(path)
+        self._icc = icc_segments(data)
         size = header_size(data) if data[:3] == b"\xff\xd8\xff" else None
         if size is not None and size[0] * size[1] <= max_pixels:
             into = self.array(1, (size[0] * size[1] * 4,), np.uint8)
@@ -507,6 +511,16 @@ class Scratch:
         out_shape = (height, width, *source.pixels.shape[2:])
         out = self.array(0, out_shape, source.pixels.dtype)
         return warp_working(source, pixel_map, interpolation, fill, alpha, out, antialias)
+
+    def encode(self, warped: Working, extension: str, quality: int = 95) -> bytes:
+        """:func:`encode_image` of what :meth:`warp` gave; a JPEG made from a JPEG keeps its
+        colour profile (the input's ICC segments, as they were)."""
+        from .jpeg_stream import with_segments
+
+        encoded = encode_image(warped, extension, quality)
+        if canonical_extension(extension) == ".jpg":
+            encoded = with_segments(encoded, self._icc)
+        return encoded
 
 
 # --------------------------------------------------------------------------------------------

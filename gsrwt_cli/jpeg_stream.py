@@ -70,3 +70,48 @@ def jpeg_stream_end(data: bytes | bytearray | memoryview) -> int | None:
             if found is None:
                 return None
             position = found.start()
+
+
+#: What starts the payload of an APP2 segment that carries (a chunk of) an ICC profile.
+_ICC_SIGNATURE = b"ICC_PROFILE\x00"
+_APP0, _APP2 = 0xE0, 0xE2
+
+
+def _header_segments(data: bytes) -> list[tuple[int, int, int]]:
+    """``(code, start, end)`` of each marker segment before the first scan (``start`` at its
+    ``FF``); empty for data that is not a JPEG or whose header is cut short."""
+    if data[:2] != b"\xff\xd8":
+        return []
+    segments, position, size = [], 2, len(data)
+    while position + 4 <= size and data[position] == 0xFF:
+        code = data[position + 1]
+        if code in _STANDALONE or code in (0xFF, 0x00):
+            position += 1 if code == 0xFF else 2
+            continue
+        length = int.from_bytes(data[position + 2:position + 4], "big")
+        end = position + 2 + length
+        if length < 2 or end > size:
+            break
+        segments.append((code, position, end))
+        if code == _SOS:
+            break
+        position = end
+    return segments
+
+
+def icc_segments(data: bytes) -> bytes:
+    """The APP2 ``ICC_PROFILE`` segments of a JPEG's header, whole and in order (a profile
+    over 64 KB is split over several: ICC.1 Annex B.4); empty if it has none."""
+    return b"".join(data[start:end] for code, start, end in _header_segments(data)
+                    if code == _APP2 and data[start + 4:start + 4 + len(_ICC_SIGNATURE)]
+                    == _ICC_SIGNATURE)
+
+
+def with_segments(jpeg: bytes, segments: bytes) -> bytes:
+    """``jpeg`` with marker ``segments`` inserted into its header: after its JFIF APP0
+    segment, which must come first, or else right after its start-of-image marker."""
+    if not segments:
+        return jpeg
+    header = _header_segments(jpeg)
+    at = header[0][2] if header and header[0][0] == _APP0 else 2
+    return jpeg[:at] + segments + jpeg[at:]

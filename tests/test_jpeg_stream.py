@@ -132,3 +132,36 @@ def test_rectify_reads_a_motion_photo_and_still_refuses_a_truncated_jpeg(tmp_pat
     assert (out / "motion.jpg").read_bytes() == (out / "plain.jpg").read_bytes()
     assert motion.std() > 20  # the photo rectified, not a blank
     np.testing.assert_array_equal(motion, plain)
+
+
+@pytest.mark.parametrize("profile_size", ["srgb", 150_000])
+def test_rectify_keeps_a_jpegs_colour_profile(tmp_path, profile_size):
+    """A JPEG's ICC profile (one APP2 segment, or a big one split over three) is carried into
+    its rectified JPEG byte for byte, as Pillow reads it back; a PNG output and a JPEG with no
+    profile get none."""
+    from PIL import Image, ImageCms
+
+    if profile_size == "srgb":
+        profile = ImageCms.ImageCmsProfile(ImageCms.createProfile("sRGB")).tobytes()
+    else:
+        profile = np.random.default_rng(3).integers(0, 256, profile_size, np.uint8).tobytes()
+    folder = tmp_path / "in"
+    folder.mkdir()
+    picture = Image.fromarray(cv2.cvtColor(cv2.imread(str(PHOTO)), cv2.COLOR_BGR2RGB))
+    picture.save(folder / "with.jpg", quality=92, icc_profile=profile)
+    picture.save(folder / "without.jpg", quality=92)
+    out = tmp_path / "out"
+    result = run_gsrwt("rectify", str(folder), "--pan", "10", "--tilt", "-5", "--focal", "537",
+                       "-o", str(out))
+    assert result.returncode == 0, result.stderr
+    with Image.open(out / "with.jpg") as rectified:
+        assert rectified.info.get("icc_profile") == profile
+        difference = np.abs(np.asarray(rectified, np.int16) - np.asarray(picture, np.int16))
+        assert difference.mean() > 10  # a new picture, not a copy
+    with Image.open(out / "without.jpg") as rectified:
+        assert "icc_profile" not in rectified.info
+    png = tmp_path / "png"
+    run_gsrwt("rectify", str(folder / "with.jpg"), "--pan", "10", "--tilt", "-5", "--focal",
+              "537", "-o", str(png), "--ext", ".png")
+    with Image.open(next(png.glob("*.png"))) as rectified:
+        assert "icc_profile" not in rectified.info
