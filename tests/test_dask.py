@@ -121,7 +121,7 @@ def test_a_worker_killed_mid_batch_loses_nothing(tmp_path, cluster):
 
 @pytest.mark.slow
 def test_ctrl_c_cancels_the_tasks_and_writes_the_table_of_what_finished(tmp_path):
-    sources = make_photos(tmp_path / "in", 40)
+    sources = make_photos(tmp_path / "in", 120)  # so that Ctrl-C lands mid-batch
     process = start(["rectify", "in", *POSE, "-o", "out", "-j", "2", "--scheduler", "local"],
                     tmp_path)
     wait_for_outputs(tmp_path / "out", 3, process)
