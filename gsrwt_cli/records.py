@@ -70,6 +70,8 @@ def merge_values(own: Mapping[str, Any], *fallbacks: Mapping[str, Any]) -> dict[
     A record that gives the pose as the GS-RWT's ``delta``/``a`` takes no pan or tilt from
     the fallbacks, and one that gives pan/tilt takes no ``delta``, ``a`` or ``gamma``.
     """
+    if not any(fallbacks):  # nothing to fall back on (a sidecar's row alone, most often)
+        return dict(own)
     merged: dict[str, Any] = {}
     for fallback in reversed(fallbacks):
         merged.update(fallback)

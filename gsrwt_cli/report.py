@@ -3,16 +3,30 @@
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Callable, Iterable, Iterator, Mapping
+from dataclasses import dataclass
 from itertools import islice
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .camera import MIN_HORIZON_OFFSET_PX, View
+from .camera import (
+    DISTANCE_RANGE,
+    MAX_FOCAL_PX,
+    MAX_PRINCIPAL_POINT_PX,
+    MAX_SIDE_PX,
+    MIN_HORIZON_OFFSET_PX,
+    View,
+)
 from .geometry import parameter_arrays
-from .records import RecordError, simple_pinhole_numbers, view_from_values
+from .records import (
+    SIMPLE_PINHOLE_FIELDS,
+    RecordError,
+    simple_pinhole_numbers,
+    view_from_values,
+)
 
 if TYPE_CHECKING:
     from .landmarks import Line, Match
@@ -88,11 +102,22 @@ def params_row(view: View, image: str | None = None) -> dict[str, Any]:
 PARAMS_CHUNK = 2048
 
 
+@dataclass(frozen=True)
+class ParamsBlock:
+    """Consecutive ``params`` rows as columns (``count`` values each; ``nan`` where
+    :func:`params_row` leaves a column out: the tables write both as an empty cell)."""
+
+    columns: dict[str, list[Any]]
+    count: int
+
+
 def params_rows(
     records: Iterable[tuple[str | None, Mapping[str, Any], str]],
-) -> Iterator[dict[str, Any] | RecordError]:
+) -> Iterator[dict[str, Any] | RecordError | ParamsBlock]:
     """:func:`params_row` of each ``(image, values, where)``, in order, or the
-    :class:`~gsrwt_cli.records.RecordError` of a record that is no valid view.
+    :class:`~gsrwt_cli.records.RecordError` of a record that is no valid view. A chunk of
+    plain text records (a CSV's) that are all valid square-pixel pinholes comes as one
+    :class:`ParamsBlock`.
 
     Square-pixel pinhole records (:func:`~gsrwt_cli.records.simple_pinhole_numbers`) are
     computed :data:`PARAMS_CHUNK` at a time by :func:`~gsrwt_cli.geometry.parameter_arrays`,
@@ -100,6 +125,10 @@ def params_rows(
     """
     records = iter(records)
     while chunk := list(islice(records, PARAMS_CHUNK)):
+        block = _text_block(chunk)
+        if block is not None:
+            yield block
+            continue
         numbers = [simple_pinhole_numbers(values, where) for _, values, where in chunk]
         simple = [index for index, found in enumerate(numbers) if found is not None]
         rows: dict[int, dict[str, Any]] = {}
@@ -118,10 +147,67 @@ def params_rows(
                 yield error
 
 
-def _simple_pinhole_rows(table: np.ndarray) -> list[dict[str, Any] | None]:
+#: What the cells of a :class:`ParamsBlock`'s numbers may hold: a decimal's characters.
+_NOT_DECIMAL = re.compile(r"[^0-9eE.+\-\n]")
+#: The columns of a block, in the order of :func:`simple_pinhole_numbers`'s result.
+_BLOCK_FIELDS = ("pan", "tilt", "focal", "cx", "cy", "width", "height")
+
+
+def _text_block(chunk: list[tuple[str | None, Mapping[str, Any], str]]) -> ParamsBlock | None:
+    """The chunk as one :class:`ParamsBlock` if every record gives the same
+    :data:`~gsrwt_cli.records.SIMPLE_PINHOLE_FIELDS` as decimal text and is a valid view
+    (as :func:`~gsrwt_cli.records.simple_pinhole_numbers` would find each); else None."""
+    given = {name for _, values, _ in chunk for name in values}
+    if not given <= SIMPLE_PINHOLE_FIELDS or not {"pan", "tilt", "focal"} <= given:
+        return None
+    if ("cx" in given) != ("cy" in given):
+        return None
+    numbers = {}
+    for name in (*_BLOCK_FIELDS, "distance"):
+        if name not in given:
+            numbers[name] = np.full(len(chunk), np.nan)
+            continue
+        texts = [values.get(name) for _, values, _ in chunk]
+        try:
+            if _NOT_DECIMAL.search("\n".join(texts)):  # None or a number: TypeError
+                return None
+            numbers[name] = np.array(texts, dtype=np.float64)
+        except (TypeError, ValueError):
+            return None
+    pan, tilt, focal = numbers["pan"], numbers["tilt"], numbers["focal"]
+    width, height, distance = numbers["width"], numbers["height"], numbers["distance"]
+    cx, cy = numbers["cx"], numbers["cy"]
+    known = {name: values for name, values in numbers.items() if name in given}
+    with np.errstate(invalid="ignore"):
+        valid = (all(np.isfinite(values).all() for values in known.values())
+                 and (np.abs(pan) < 90).all() and (np.abs(tilt) < 90).all()
+                 and ((focal > 0) & (focal < MAX_FOCAL_PX)).all()
+                 and ("distance" not in given or ((distance > DISTANCE_RANGE[0])
+                                                  & (distance < DISTANCE_RANGE[1])).all())
+                 and all(((side > 0) & (side <= MAX_SIDE_PX) & (side == np.floor(side))).all()
+                         for name, side in (("width", width), ("height", height))
+                         if name in given)
+                 and ("cx" not in given or ((np.abs(cx) < MAX_PRINCIPAL_POINT_PX)
+                                            & (np.abs(cy) < MAX_PRINCIPAL_POINT_PX)).all()))
+    if not valid:
+        return None
+    if "cx" not in given and {"width", "height"} <= given:
+        cx, cy = (width - 1) / 2.0, (height - 1) / 2.0  # as Intrinsics does
+    columns, usable = _simple_pinhole_columns(np.column_stack(
+        [pan, tilt, focal, cx, cy, width, height]))
+    if not usable.all():
+        return None
+    lists = {name: values.tolist() for name, values in columns.items()}
+    lists["image"] = [image for image, _, _ in chunk]
+    lists["roll_deg"] = [0.0] * len(chunk)
+    return ParamsBlock(lists, len(chunk))
+
+
+def _simple_pinhole_columns(table: np.ndarray) -> tuple[dict[str, np.ndarray], np.ndarray]:
     """The :func:`params_row` columns of square-pixel pinholes given as rows ``(pan, tilt,
-    focal, cx, cy, width, height)`` (``nan``: unknown); None for a view whose horizon is too
-    close to its principal point (its view gives the error)."""
+    focal, cx, cy, width, height)`` (``nan``: unknown), ``nan`` where a row has no such value
+    (``horizon_in_image``: an object array of True, False and None), and which rows are
+    views (a horizon too close to the principal point is not: its view gives the error)."""
     pan, tilt, focal, cx, cy, width, height = table.T
     found = parameter_arrays(pan, tilt, focal)
     frontal, shift = found["frontal"], found["shift"]
@@ -144,24 +230,31 @@ def _simple_pinhole_rows(table: np.ndarray) -> list[dict[str, Any] | None]:
         "foreshortening": found["foreshortening"], "vp_col": vp_col, "vp_row": vp_row,
         "vl_a": line_a, "vl_b": line_b, "vl_c": line_c,
     }
+    no_point = np.isnan(cx)
+    for name in ("vp_col", "vp_row"):
+        columns[name] = np.where(no_point, np.nan, columns[name])
+    for name in ("vl_a", "vl_b", "vl_c"):
+        columns[name] = np.where(no_point | frontal, np.nan, columns[name])
+    horizon = np.where(crosses & ~frontal, True, False).astype(object)
+    horizon[np.isnan(width) | np.isnan(height)] = None
+    columns["horizon_in_image"] = horizon
+    return columns, frontal | (shift >= MIN_HORIZON_OFFSET_PX)
+
+
+def _simple_pinhole_rows(table: np.ndarray) -> list[dict[str, Any] | None]:
+    """:func:`_simple_pinhole_columns` as :func:`params_row`'s rows (the columns it leaves
+    out left out); None for a row that is no view."""
+    columns, usable = _simple_pinhole_columns(table)
     lists = {name: values.tolist() for name, values in columns.items()}
     rows: list[dict[str, Any] | None] = []
     for index in range(len(table)):
-        if not frontal[index] and not shift[index] >= MIN_HORIZON_OFFSET_PX:
+        if not usable[index]:
             rows.append(None)
             continue
-        row = {name: values[index] for name, values in lists.items()}
+        row = {name: values[index] for name, values in lists.items()
+               if not (type(values[index]) is float and math.isnan(values[index])
+                       and name.startswith(("vp_col", "vp_row", "vl_")))}
         row["roll_deg"] = 0.0
-        known_point = not math.isnan(cx[index])
-        known_size = not (math.isnan(width[index]) or math.isnan(height[index]))
-        if not known_point:
-            for name in ("vp_col", "vp_row", "vl_a", "vl_b", "vl_c"):
-                del row[name]
-        elif frontal[index]:
-            for name in ("vl_a", "vl_b", "vl_c"):
-                del row[name]
-        row["horizon_in_image"] = (None if not known_size
-                                   else bool(crosses[index]) and not frontal[index])
         rows.append(row)
     return rows
 

@@ -36,6 +36,9 @@ from .messages import escape_controls, one_line, quote
 from .records import SIDECAR_FIELDS, merge_values, view_from_values
 from .storage import is_url, location
 
+#: :data:`~gsrwt_cli.records.SIDECAR_FIELDS` as a set, for the test of every CSV row.
+SIDECAR_FIELD_SET = frozenset(SIDECAR_FIELDS)
+
 
 class SidecarError(ValueError):
     """The sidecar file as a whole cannot be used (missing, unreadable, malformed)."""
@@ -240,12 +243,15 @@ def _csv_records(path: Path, lines: Iterable[str], delimiter: str) -> Iterator[R
                 raise SidecarError(
                     f"{where}: {len(cells)} cells but the header has {len(columns)}"
                 )
-            row = {c: v.strip() for c, v in zip(columns, cells) if v.strip() != ""}
+            row = {c: v for c, v in zip(columns, map(str.strip, cells)) if v}
             image = row.pop("image", "")
             if not image:
                 raise SidecarError(f"{where}, field 'image': empty")
-            values = {k: v for k, v in row.items() if k in SIDECAR_FIELDS}
-            yield Record(image=image, values=_with_camera_path(path, values), where=where)
+            values = row if row.keys() <= SIDECAR_FIELD_SET else {
+                k: v for k, v in row.items() if k in SIDECAR_FIELD_SET}
+            if "camera" in values:
+                values = _with_camera_path(path, values)
+            yield Record(image=image, values=values, where=where)
     except csv.Error as error:
         raise SidecarError(
             f"{name} line {reader.line_num}: {one_line(str(error), 200)}"

@@ -35,11 +35,20 @@ def _json_value(value: Any) -> Any:
     return value
 
 
+#: What a float formatted and stripped becomes in a cell when it is not finite, or -0.
+_NOT_FINITE_OR_MINUS_ZERO = {"nan": "", "inf": "", "-inf": "", "-0": "0"}
+
+
 def _text_cells(values: list[Any], decimals: int) -> list[str]:
     """:func:`_text_value` of each value (finite floats, most cells, the short way)."""
     if decimals <= 0:
         return [_text_value(value, decimals) for value in values]
-    spec, finite, cells = f".{decimals}f", math.isfinite, []
+    spec = f".{decimals}f"
+    if set(map(type, values)) == {float}:  # a column of numbers: in bulk
+        cells = [format(value, spec).rstrip("0").rstrip(".") for value in values]
+        fixed = _NOT_FINITE_OR_MINUS_ZERO.get
+        return [fixed(cell, cell) for cell in cells]
+    finite, cells = math.isfinite, []
     for value in values:
         if type(value) is float and finite(value):
             text = format(value, spec).rstrip("0").rstrip(".")
@@ -120,6 +129,21 @@ class TableWriter:
                  for column in self.columns]
         self._csv.writerows(zip(*cells))
         self._rows_written += len(rows)
+        if self.flush_rows:
+            self.stream.flush()
+
+    def write_columns(self, columns: Mapping[str, Sequence[Any]], count: int) -> None:
+        """Write ``count`` rows given as columns (a missing column is empty), as
+        :meth:`write_rows` would write them."""
+        if self._csv is None:
+            self.write_rows({name: values[index] for name, values in columns.items()}
+                            for index in range(count))
+            return
+        empty = [None] * count
+        cells = [_text_cells(list(columns.get(column, empty)), MACHINE_DECIMALS)
+                 for column in self.columns]
+        self._csv.writerows(zip(*cells))
+        self._rows_written += count
         if self.flush_rows:
             self.stream.flush()
 

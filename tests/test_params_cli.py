@@ -308,3 +308,57 @@ def test_views_computed_together_are_exactly_those_of_their_views():
                                     and math.isnan(got)), (name, values, got, value)
         fast += "roll" not in values
     assert fast > 8_000  # valid rows without roll: computed together
+
+
+@pytest.mark.parametrize("kind", ["size", "principal point", "neither", "frontal rows"])
+def test_a_plain_csv_chunk_computed_as_columns_writes_what_its_views_would(kind):
+    """A chunk of plain CSV rows (decimal text, valid square-pixel pinholes) is computed and
+    written as columns: the same csv and json, byte for byte, as each row's own view gives."""
+    import random
+
+    from gsrwt_cli.records import view_from_values
+    from gsrwt_cli.report import PARAMS_CHUNK, ParamsBlock, params_row, params_rows
+    from gsrwt_cli.tables import TableWriter
+
+    rng = random.Random(kind)
+    records = []
+    for index in range(PARAMS_CHUNK + 100):  # a whole chunk, then part of one
+        values = {"pan": f"{rng.uniform(-85, 85):.4f}", "tilt": f"{rng.uniform(-85, 85):.4f}",
+                  "focal": f"{rng.uniform(50, 4000):.3f}"}
+        if kind == "frontal rows" and index % 3 == 0:
+            values.update(pan="0", tilt="-0.0")
+        if kind in ("size", "frontal rows"):
+            values.update(width=str(rng.randint(1, 6000)), height=str(rng.randint(1, 6000)))
+        elif kind == "principal point":
+            values.update(cx=f"{rng.uniform(-50, 900):.2f}", cy=f"{rng.uniform(-50, 900):.2f}")
+        records.append((f"img{index}.jpg", values, f"views.csv line {index + 2}"))
+    produced = list(params_rows(records))
+    assert all(isinstance(item, ParamsBlock) for item in produced) and len(produced) == 2
+    for fmt in ("csv", "json"):
+        fast, slow = io.StringIO(), io.StringIO()
+        writer = TableWriter(fast, PARAMS_COLUMNS, fmt)
+        for block in produced:
+            writer.write_columns(block.columns, block.count)
+        writer.close()
+        rows = [params_row(view_from_values(values, where), image)
+                for image, values, where in records]
+        one_by_one = TableWriter(slow, PARAMS_COLUMNS, fmt)
+        for row in rows:
+            one_by_one.write_row(row)
+        one_by_one.close()
+        assert fast.getvalue() == slow.getvalue()
+
+
+def test_a_chunk_with_one_odd_cell_is_computed_row_by_row():
+    """One cell that is not plain decimal text (here ``1_000``, which Python's float reads)
+    sends its chunk the long way: that row is the error its view gives."""
+    from gsrwt_cli.records import RecordError
+    from gsrwt_cli.report import ParamsBlock, params_rows
+
+    records = [(f"i{index}", {"pan": "10", "tilt": "5", "focal": "300"}, f"v line {index}")
+               for index in range(50)]
+    records[7] = ("i7", {"pan": "10", "tilt": "5", "focal": "1_000"}, "v line 7")
+    produced = list(params_rows(records))
+    assert not any(isinstance(item, ParamsBlock) for item in produced)
+    assert isinstance(produced[7], RecordError) and "not a number" in str(produced[7])
+    assert sum(isinstance(item, dict) for item in produced) == 49

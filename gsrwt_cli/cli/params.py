@@ -41,7 +41,7 @@ def params(sidecar: Path | None, fmt: str | None, **kwargs: Any) -> None:
       gsrwt params --sidecar sample_data/views/views.csv --format json
     """
     from ..records import RecordError
-    from ..report import PARAMS_CHUNK, PARAMS_COLUMNS, params_row, params_rows
+    from ..report import PARAMS_CHUNK, PARAMS_COLUMNS, ParamsBlock, params_row, params_rows
     from ..sidecar import SidecarError, iter_sidecar_records
     from ..tables import TableWriter
 
@@ -64,7 +64,11 @@ def params(sidecar: Path | None, fmt: str | None, **kwargs: Any) -> None:
         rows = params_rows((record.image, record.merged(defaults), record.where)
                            for record in taken)
         for row in rows:
-            if isinstance(row, RecordError):
+            if isinstance(row, ParamsBlock):
+                writer.write_rows(block)
+                writer.write_columns(row.columns, row.count)
+                block = []
+            elif isinstance(row, RecordError):
                 if last_error is not None:
                     report_error(last_error)
                 last_error = str(row)
