@@ -19,7 +19,9 @@ from ..sidecar import SidecarError, display_path, load_sidecar
 from ..tables import FORMATS, TableWriter, format_from_extension
 from ..targets import Drawings
 from .options import (
+    VIEW_OPTIONS,
     InputError,
+    field_options,
     make_output_directory,
     report_error,
     resolve_format,
@@ -28,6 +30,7 @@ from .options import (
 from .rectify import (
     Terminated,
     collect_sources,
+    end_batch,
     open_table,
     parse_pixel_count,
     stop_on_signals,
@@ -39,19 +42,14 @@ CAMERA_OPTIONS = {
                      "EXIF, else estimated from the image]."),
     "fx": (float, "Horizontal focal length in pixels (with --fy)."),
     "fy": (float, "Vertical focal length in pixels (with --fx)."),
-    "cx": (float, "Principal point column [default: image centre]."),
-    "cy": (float, "Principal point row [default: image centre]."),
+    "cx": VIEW_OPTIONS["cx"],
+    "cy": VIEW_OPTIONS["cy"],
 }
 
 
-def camera_options(func):  # type: ignore[no-untyped-def]
-    for name in reversed(CAMERA_OPTIONS):
-        kind, text = CAMERA_OPTIONS[name]
-        func = click.option(f"--{name}", type=kind, help=text)(func)
-    return click.option(
-        "--camera", type=click.Path(dir_okay=False),
-        help="Calibration file (OpenCV YAML/XML or ROS camera_info): intrinsics and lens "
-             "(the lens is removed from the segments' end points).")(func)
+camera_options = field_options(
+    CAMERA_OPTIONS, "Calibration file (OpenCV YAML/XML or ROS camera_info): intrinsics and "
+    "lens (the lens is removed from the segments' end points).")
 
 
 @click.command()
@@ -178,13 +176,8 @@ def estimate(inputs: tuple[str, ...], output: str | None, fmt: str | None, recur
         finally:
             progress.close()
         writer.close()
-    if not quiet:
-        where = "" if output == "-" else f"; table: {display_path(output)}"
-        summary = f"{counts['ok']} estimated, {counts['failed']} failed"
-        if stopped is not None:
-            summary = f"interrupted: {summary}, {counts['interrupted']} not done"
-        click.echo(f"gsrwt: {summary}{where}", err=True)
+    summary = f"{counts['ok']} estimated, {counts['failed']} failed"
     if stopped is not None:
-        sys.exit(143 if isinstance(stopped, Terminated) else 130)
-    if counts["failed"]:
-        sys.exit(1)
+        summary += f", {counts['interrupted']} not done"
+    end_batch(summary, "" if output == "-" else f"; table: {display_path(output)}", stopped,
+              counts["failed"], quiet)

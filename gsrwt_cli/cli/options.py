@@ -135,16 +135,24 @@ VIEW_OPTIONS: dict[str, tuple[type, str]] = {
 }
 
 
-def view_options(func: F) -> F:
-    """``--pan --tilt --roll --focal --fx --fy --cx --cy --skew --width --height --distance``:
-    one option for each field of :data:`~gsrwt_cli.camera.VIEW_FIELDS`, in its order."""
-    for name in reversed(VIEW_FIELDS):
-        kind, text = VIEW_OPTIONS[name]
-        func = click.option(f"--{name}", type=kind, help=text)(func)
-    return click.option(
-        "--camera", type=click.Path(dir_okay=False),
-        help="Calibration file (OpenCV YAML/XML or ROS camera_info) with the intrinsics and "
-             "lens; the view options and sidecar fields override it.")(func)
+def field_options(fields: dict[str, tuple[type, str]], camera_help: str) -> Callable[[F], F]:
+    """``--camera FILE`` (with ``camera_help``), then one option per field of ``fields``
+    (name: type and help), in its order."""
+    def decorate(func: F) -> F:
+        for name in reversed(fields):
+            kind, text = fields[name]
+            func = click.option(f"--{name}", type=kind, help=text)(func)
+        return click.option("--camera", type=click.Path(dir_okay=False),
+                            help=camera_help)(func)
+    return decorate
+
+
+#: ``--pan --tilt --roll --focal --fx --fy --cx --cy --skew --width --height --distance``
+#: and ``--camera``: one option for each field of :data:`~gsrwt_cli.camera.VIEW_FIELDS`.
+view_options = field_options(
+    {name: VIEW_OPTIONS[name] for name in VIEW_FIELDS},
+    "Calibration file (OpenCV YAML/XML or ROS camera_info) with the intrinsics and lens; the "
+    "view options and sidecar fields override it.")
 
 
 def interpolation_option(func: F) -> F:

@@ -276,6 +276,20 @@ class Terminated(BaseException):
     """SIGTERM, raised in the main process like KeyboardInterrupt is for SIGINT."""
 
 
+def end_batch(summary: str, where: str, stopped: BaseException | None, failed: int,
+              quiet: bool) -> None:
+    """A batch command's last line on stderr (``gsrwt: SUMMARY; table: ...``, unless
+    ``quiet``) and its exit status: 130 or 143 if ``stopped`` by SIGINT or SIGTERM (the line
+    then starts ``interrupted:``; ``summary`` says what was not done), 1 if some failed."""
+    if not quiet:
+        click.echo(f"gsrwt: {'interrupted: ' if stopped is not None else ''}{summary}{where}",
+                   err=True)
+    if stopped is not None:
+        sys.exit(143 if isinstance(stopped, Terminated) else 130)
+    if failed:
+        sys.exit(1)
+
+
 @contextlib.contextmanager
 def stop_on_signals() -> Iterator[None]:
     """SIGINT raises KeyboardInterrupt and SIGTERM raises :class:`Terminated`, once.
@@ -565,13 +579,8 @@ def rectify(
         raise InputError(f"--table {table_path}: cannot write the table ({error})") from None
     finally:
         progress.close()
-    if not quiet:
-        where = "" if table_path == "-" else f"; table: {table_path}"
-        summary = f"{counts.ok} ok, {counts.skipped} skipped, {counts.failed} failed"
-        if stopped is not None:
-            summary = f"interrupted: {summary}, {counts.interrupted} not done"
-        click.echo(f"gsrwt: {summary}{where}", err=True)
+    summary = f"{counts.ok} ok, {counts.skipped} skipped, {counts.failed} failed"
     if stopped is not None:
-        sys.exit(143 if isinstance(stopped, Terminated) else 130)
-    if counts.failed:
-        sys.exit(1)
+        summary += f", {counts.interrupted} not done"
+    end_batch(summary, "" if table_path == "-" else f"; table: {table_path}", stopped,
+              counts.failed, quiet)
