@@ -22,7 +22,7 @@ PHOTO = ROOT / "tests" / "data" / "facade" / "building.jpg"
 def main() -> None:
     gsrwt = Path(sys.executable).with_name("gsrwt")
     with tempfile.TemporaryDirectory() as work:
-        subprocess.run([str(gsrwt), "rectify", str(PHOTO), "--auto", "--wall", "dominant",
+        subprocess.run([str(gsrwt), "rectify", str(PHOTO), "--auto",
                         "--bbox", "full", "--max-size", "1600x1200", "-o", work, "-q"],
                        check=True)
         rectified = cv2.imread(str(Path(work) / PHOTO.name))

@@ -122,9 +122,8 @@ def facade_columns(grey: np.ndarray, band: tuple[float, float]) -> tuple[int, in
 @pytest.fixture(scope="module")
 def rectified(tmp_path_factory) -> tuple[np.ndarray, dict[str, str]]:
     out = tmp_path_factory.mktemp("building")
-    result = run_gsrwt("rectify", str(BUILDING), "--auto", "--wall", "dominant", "--bbox",
-                       "full", "--max-size", "1600x1200", "-o", str(out / "out"), "--table",
-                       str(out / "table.csv"))
+    result = run_gsrwt("rectify", str(BUILDING), "--auto", "--bbox", "full", "--max-size",
+                       "1600x1200", "-o", str(out / "out"), "--table", str(out / "table.csv"))
     assert result.returncode == 0, result.stderr
     with open(out / "table.csv", newline="") as stream:
         (row,) = csv.DictReader(stream)
@@ -136,6 +135,26 @@ def test_the_pose_and_focal_length_are_estimated(rectified):
     assert row["pose_source"] == "estimated" and row["focal_source"] == "estimated"
     assert float(row["confidence"]) > 0.7
     assert 45 < float(row["pan_deg"]) < 70  # the facade, seen from its right
+
+
+def test_estimate_reports_the_more_frontal_plane_and_rectify_auto_the_facade(tmp_path):
+    """The two defaults differ on purpose (README): ``estimate`` follows spec section 7 (the
+    building's end, |pan| <= 45), ``rectify --auto`` the plane with the more horizontal edges
+    (the facade); each command's ``--wall`` gives the other's choice."""
+    def pan(*args: str) -> float:
+        result = run_gsrwt("estimate", str(BUILDING), "-f", "csv", *args)
+        assert result.returncode == 0, result.stderr
+        (row,) = csv.DictReader(result.stdout.splitlines())
+        return float(row["pan"])
+
+    frontal, dominant = pan(), pan("--wall", "dominant")
+    assert abs(frontal) <= 45 and 45 < dominant < 70
+    assert abs(abs(dominant - frontal) - 90) < 1e-6
+    result = run_gsrwt("rectify", str(BUILDING), "--auto", "--wall", "frontal", "-o",
+                       str(tmp_path / "out"), "--table", "-", "-q")
+    assert result.returncode == 0, result.stderr
+    (row,) = csv.DictReader(result.stdout.splitlines())
+    assert float(row["pan_deg"]) == pytest.approx(frontal, abs=1e-4)
 
 
 def test_rows_are_horizontal_and_columns_vertical_within_half_a_degree(rectified):

@@ -426,9 +426,10 @@ def dask_executor(address: str, processes: int, retries: int,
                    "their own lines (as 'gsrwt estimate'; the focal length too if unknown).")
 @click.option("--min-confidence", type=click.FloatRange(0, 1), default=0.0, show_default=True,
               help="With --auto: estimates less confident than this (0-1) are errors.")
-@click.option("--wall", type=click.Choice(WALL_CHOICES), default="frontal", show_default=True,
-              help="With --auto: the wall is the most frontal vertical plane (|pan| <= 45) or "
-                   "the one with the most horizontal edges.")
+@click.option("--wall", type=click.Choice(WALL_CHOICES), default="dominant", show_default=True,
+              help="With --auto: the wall to rectify is the vertical plane with the most "
+                   "horizontal edges (the surface the photo shows) or the most frontal one "
+                   "(|pan| <= 45, as 'gsrwt estimate' reports poses).")
 def rectify(
     inputs: tuple[str, ...], outdir: Path, recursive: bool, sidecar: Path | None, bbox: str,
     max_stretch: float, scale: float | None, px_per_unit: float | None, max_pixels: str,
