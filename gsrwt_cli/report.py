@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 import re
-from collections.abc import Callable, Iterable, Iterator, Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from itertools import islice
 from pathlib import Path
@@ -22,6 +22,7 @@ from .camera import (
 )
 from .geometry import parameter_arrays
 from .records import (
+    GSRWT_FIELDS,
     SIMPLE_PINHOLE_FIELDS,
     RecordError,
     simple_pinhole_numbers,
@@ -154,53 +155,82 @@ _BLOCK_FIELDS = ("pan", "tilt", "focal", "cx", "cy", "width", "height")
 
 
 def _text_block(chunk: list[tuple[str | None, Mapping[str, Any], str]]) -> ParamsBlock | None:
-    """The chunk as one :class:`ParamsBlock` if every record gives the same
-    :data:`~gsrwt_cli.records.SIMPLE_PINHOLE_FIELDS` as decimal text and is a valid view
-    (as :func:`~gsrwt_cli.records.simple_pinhole_numbers` would find each); else None."""
+    """The chunk of records as one :class:`ParamsBlock` (:func:`params_block` of their
+    values as columns), if every record gives the same fields; else None."""
     given = {name for _, values, _ in chunk for name in values}
-    if not given <= SIMPLE_PINHOLE_FIELDS or not {"pan", "tilt", "focal"} <= given:
+    if not given <= SIMPLE_PINHOLE_FIELDS:
         return None
-    if ("cx" in given) != ("cy" in given):
+    columns: dict[str, list[Any]] = {name: [values.get(name) for _, values, _ in chunk]
+                                     for name in given}
+    columns["image"] = [image for image, _, _ in chunk]
+    return params_block(columns)
+
+
+def params_block(columns: Mapping[str, Sequence[Any]], defaults: Mapping[str, Any] | None = None
+                 ) -> ParamsBlock | None:
+    """Consecutive views given as columns of sidecar fields (``image``, and text cells as a
+    CSV holds them: a :class:`~gsrwt_cli.sidecar.CsvChunk`'s
+    :meth:`~gsrwt_cli.sidecar.CsvChunk.text_columns`), over ``defaults`` (numbers, as
+    :func:`~gsrwt_cli.records.merge_values` merges them), as one :class:`ParamsBlock`,
+    exactly the rows of their views (Eqs. 4.4-4.8 through
+    :func:`~gsrwt_cli.geometry.parameter_arrays`). None unless every view gives only
+    :data:`~gsrwt_cli.records.SIMPLE_PINHOLE_FIELDS` as plain decimal text (other columns
+    than sidecar fields ignored, as is a column of empty cells) and is valid: the caller
+    then takes them one by one, and each gives its own row or error."""
+    given = {name for name, cells in columns.items() if name != "image" and any(cells)}
+    constants: dict[str, float] = {}
+    for name, value in (defaults or {}).items():
+        if name in given or (name in GSRWT_FIELDS and {"pan", "tilt"} <= given):
+            continue  # the column's own cells win; pan and tilt drop the GS-RWT's pose
+        if name not in SIMPLE_PINHOLE_FIELDS or type(value) not in (int, float):
+            return None
+        constants[name] = float(value)
+    known = given | set(constants)
+    if not known <= SIMPLE_PINHOLE_FIELDS or not {"pan", "tilt", "focal"} <= known:
         return None
+    if ("cx" in known) != ("cy" in known):
+        return None
+    count = len(columns["image"])
     numbers = {}
     for name in (*_BLOCK_FIELDS, "distance"):
-        if name not in given:
-            numbers[name] = np.full(len(chunk), np.nan)
-            continue
-        texts = [values.get(name) for _, values, _ in chunk]
-        try:
-            if _NOT_DECIMAL.search("\n".join(texts)):  # None or a number: TypeError
+        if name in constants:
+            numbers[name] = np.full(count, constants[name])
+        elif name not in given:
+            numbers[name] = np.full(count, np.nan)
+        else:
+            texts = columns[name]
+            try:
+                if _NOT_DECIMAL.search("\n".join(texts)):  # None or a number: TypeError
+                    return None
+                numbers[name] = np.array(texts, dtype=np.float64)  # "" : ValueError
+            except (TypeError, ValueError):
                 return None
-            numbers[name] = np.array(texts, dtype=np.float64)
-        except (TypeError, ValueError):
-            return None
     pan, tilt, focal = numbers["pan"], numbers["tilt"], numbers["focal"]
     width, height, distance = numbers["width"], numbers["height"], numbers["distance"]
     cx, cy = numbers["cx"], numbers["cy"]
-    known = {name: values for name, values in numbers.items() if name in given}
     with np.errstate(invalid="ignore"):
-        valid = (all(np.isfinite(values).all() for values in known.values())
+        valid = (all(np.isfinite(numbers[name]).all() for name in known)
                  and (np.abs(pan) < 90).all() and (np.abs(tilt) < 90).all()
                  and ((focal > 0) & (focal < MAX_FOCAL_PX)).all()
-                 and ("distance" not in given or ((distance > DISTANCE_RANGE[0])
+                 and ("distance" not in known or ((distance > DISTANCE_RANGE[0])
                                                   & (distance < DISTANCE_RANGE[1])).all())
                  and all(((side > 0) & (side <= MAX_SIDE_PX) & (side == np.floor(side))).all()
                          for name, side in (("width", width), ("height", height))
-                         if name in given)
-                 and ("cx" not in given or ((np.abs(cx) < MAX_PRINCIPAL_POINT_PX)
+                         if name in known)
+                 and ("cx" not in known or ((np.abs(cx) < MAX_PRINCIPAL_POINT_PX)
                                             & (np.abs(cy) < MAX_PRINCIPAL_POINT_PX)).all()))
     if not valid:
         return None
-    if "cx" not in given and {"width", "height"} <= given:
+    if "cx" not in known and {"width", "height"} <= known:
         cx, cy = (width - 1) / 2.0, (height - 1) / 2.0  # as Intrinsics does
-    columns, usable = _simple_pinhole_columns(np.column_stack(
+    block, usable = _simple_pinhole_columns(np.column_stack(
         [pan, tilt, focal, cx, cy, width, height]))
     if not usable.all():
         return None
-    lists = {name: values.tolist() for name, values in columns.items()}
-    lists["image"] = [image for image, _, _ in chunk]
-    lists["roll_deg"] = [0.0] * len(chunk)
-    return ParamsBlock(lists, len(chunk))
+    lists = {name: values.tolist() for name, values in block.items()}
+    lists["image"] = list(columns["image"])
+    lists["roll_deg"] = [0.0] * count
+    return ParamsBlock(lists, count)
 
 
 def _simple_pinhole_columns(table: np.ndarray) -> tuple[dict[str, np.ndarray], np.ndarray]:

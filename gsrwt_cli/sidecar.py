@@ -177,20 +177,106 @@ def iter_sidecar_records(path: str | Path) -> Iterator[Record]:
     grow with the file. Raises :class:`SidecarError`, possibly after some records, when the
     file turns out bad. An image given twice is two records here (nothing is looked up by
     image; :func:`load_sidecar`, for lookups, refuses it)."""
+    for chunk in iter_sidecar_chunks(path):
+        yield from chunk.records()
+
+
+#: Data rows of a CSV sidecar read at a time by :func:`iter_sidecar_chunks`.
+CHUNK_ROWS = 2048
+
+
+def iter_sidecar_chunks(path: str | Path, size: int = CHUNK_ROWS) -> Iterator[SidecarChunk]:
+    """:func:`iter_sidecar_records` as chunks of about ``size`` consecutive rows: a CSV or
+    TSV file's as it is read (:class:`CsvChunk`, whose cells a caller may also take as
+    columns), a YAML file's all at once. Raises :class:`SidecarError` as that does, after the
+    chunk of the rows before the fault."""
     path = Path(path)
     suffix = _sidecar_suffix(path)
     if suffix in (".yaml", ".yml"):
-        yield from load_sidecar(path).records
+        yield RecordChunk(load_sidecar(path).records)
         return
     _check_is_file(path)
     name = display_path(path)
     try:
         with path.open(encoding="utf-8-sig", newline="") as stream:
-            yield from _csv_records(path, stream, delimiter="\t" if suffix == ".tsv" else ",")
+            yield from _csv_chunks(path, stream, "\t" if suffix == ".tsv" else ",", size)
     except UnicodeDecodeError as error:
         raise SidecarError(f"{name}: not UTF-8 text ({error.reason})") from None
     except OSError as error:
         raise SidecarError(f"{name}: cannot read ({error.strerror})") from None
+
+
+@dataclass(frozen=True)
+class RecordChunk:
+    """Records already made (a YAML sidecar's)."""
+
+    items: list[Record]
+
+    def records(self) -> Iterator[Record]:
+        """The records, in the file's order."""
+        return iter(self.items)
+
+    def text_columns(self) -> None:
+        """YAML values are typed, not text: no columns (see :meth:`CsvChunk.text_columns`)."""
+        return None
+
+
+@dataclass(frozen=True)
+class CsvChunk:
+    """Consecutive data rows of a CSV or TSV sidecar as the csv module read them: each row's
+    cells and the line it starts on."""
+
+    path: Path
+    columns: list[str]
+    rows: list[list[str]]
+    lines: list[int]
+
+    def records(self) -> Iterator[Record]:
+        """The rows as records (blank rows skipped, cells stripped, empty cells absent, other
+        columns than :data:`~gsrwt_cli.records.SIDECAR_FIELDS` ignored); a row with more cells
+        than the header, or no image, raises :class:`SidecarError` naming its line."""
+        path, columns = self.path, self.columns
+        name = display_path(path)
+        for cells, line_number in zip(self.rows, self.lines):
+            if not any(cell.strip() for cell in cells):
+                continue
+            where = f"{name} line {line_number}"
+            if len(cells) > len(columns):
+                raise SidecarError(
+                    f"{where}: {len(cells)} cells but the header has {len(columns)}"
+                )
+            row = {c: v for c, v in zip(columns, map(str.strip, cells)) if v}
+            image = row.pop("image", "")
+            if not image:
+                raise SidecarError(f"{where}, field 'image': empty")
+            values = row if row.keys() <= SIDECAR_FIELD_SET else {
+                k: v for k, v in row.items() if k in SIDECAR_FIELD_SET}
+            if "camera" in values:
+                values = _with_camera_path(path, values)
+            yield Record(image=image, values=values, where=where)
+
+    def text_columns(self) -> dict[str, list[str]] | None:
+        """The cells of ``image`` (stripped) and of each other column of
+        :data:`~gsrwt_cli.records.SIDECAR_FIELDS`, as they are, when every row has exactly
+        the header's cells and an image: the same values :meth:`records` gives, for a
+        caller that takes them a column at a time (a cell that is empty or padded with
+        spaces is kept as it is, for that caller to refuse). None for any other chunk, whose
+        :meth:`records` tell."""
+        width = len(self.columns)
+        if not self.rows or any(len(cells) != width for cells in self.rows):
+            return None
+        cells_of = list(zip(*self.rows))
+        columns = {column: list(cells) for column, cells in zip(self.columns, cells_of)
+                   if column in SIDECAR_FIELD_SET}
+        images = [cell.strip() for cell in cells_of[self.columns.index("image")]]
+        if not all(images):
+            return None
+        columns["image"] = images
+        return columns
+
+
+#: One or the other kind of chunk.
+SidecarChunk = RecordChunk | CsvChunk
 
 
 def _checked_sidecar(path: Path, records: list[Record]) -> Sidecar:
@@ -214,8 +300,19 @@ def _without_duplicates(records: Iterable[Record]) -> Iterator[Record]:
 def _csv_records(path: Path, lines: Iterable[str], delimiter: str) -> Iterator[Record]:
     """Records of CSV/TSV text lines; ``line N`` is where the row starts, quoted newlines
     counted."""
+    for chunk in _csv_chunks(path, lines, delimiter, CHUNK_ROWS):
+        yield from chunk.records()
+
+
+def _csv_chunks(path: Path, lines: Iterable[str], delimiter: str, size: int
+                ) -> Iterator[CsvChunk]:
+    """:class:`CsvChunk` of ``size`` rows at a time of CSV/TSV text lines, after the header's
+    checks; a cell the csv module refuses raises :class:`SidecarError` naming its line, after
+    the chunk of the rows before it."""
     name = display_path(path)
     reader = csv.reader(lines, delimiter=delimiter)
+    rows: list[list[str]] = []
+    starts: list[int] = []
     try:
         header = next(reader, None)
         if header is None or not any(cell.strip() for cell in header):
@@ -235,27 +332,20 @@ def _csv_records(path: Path, lines: Iterable[str], delimiter: str) -> Iterator[R
             first_seen.setdefault(column, number)
         row_start = reader.line_num + 1
         for cells in reader:
-            line_number, row_start = row_start, reader.line_num + 1
-            if not any(cell.strip() for cell in cells):
-                continue
-            where = f"{name} line {line_number}"
-            if len(cells) > len(columns):
-                raise SidecarError(
-                    f"{where}: {len(cells)} cells but the header has {len(columns)}"
-                )
-            row = {c: v for c, v in zip(columns, map(str.strip, cells)) if v}
-            image = row.pop("image", "")
-            if not image:
-                raise SidecarError(f"{where}, field 'image': empty")
-            values = row if row.keys() <= SIDECAR_FIELD_SET else {
-                k: v for k, v in row.items() if k in SIDECAR_FIELD_SET}
-            if "camera" in values:
-                values = _with_camera_path(path, values)
-            yield Record(image=image, values=values, where=where)
+            rows.append(cells)
+            starts.append(row_start)
+            row_start = reader.line_num + 1
+            if len(rows) == size:
+                yield CsvChunk(path, columns, rows, starts)
+                rows, starts = [], []
     except csv.Error as error:
+        if rows:
+            yield CsvChunk(path, columns, rows, starts)
         raise SidecarError(
             f"{name} line {reader.line_num}: {one_line(str(error), 200)}"
         ) from None
+    if rows:
+        yield CsvChunk(path, columns, rows, starts)
 
 
 def parse_yaml(path: Path, text: str) -> Any:

@@ -142,7 +142,12 @@ class TableWriter:
         empty = [None] * count
         cells = [_text_cells(list(columns.get(column, empty)), MACHINE_DECIMALS)
                  for column in self.columns]
-        self._csv.writerows(zip(*cells))
+        delimiter = "\t" if self.fmt == "tsv" else ","
+        special = re.compile(f'[{delimiter}"\r\n]')
+        if any(special.search("".join(column)) for column in cells):
+            self._csv.writerows(zip(*cells))  # some cell to quote, as the csv module does
+        else:
+            self.stream.write("".join(f"{delimiter.join(row)}\n" for row in zip(*cells)))
         self._rows_written += count
         if self.flush_rows:
             self.stream.flush()

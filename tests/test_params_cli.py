@@ -362,3 +362,41 @@ def test_a_chunk_with_one_odd_cell_is_computed_row_by_row():
     assert not any(isinstance(item, ParamsBlock) for item in produced)
     assert isinstance(produced[7], RecordError) and "not a number" in str(produced[7])
     assert sum(isinstance(item, dict) for item in produced) == 49
+
+
+@pytest.mark.parametrize("fmt", ["csv", "tsv", "json"])
+def test_a_big_plain_sidecar_through_the_command_is_its_views_row_by_row(tmp_path, gsrwt, fmt):
+    """``params --sidecar`` takes a CSV's plain chunks as columns (cells straight from the
+    csv module, option defaults as constant columns): through the real command, the output
+    is byte for byte each row's own view written one row at a time, for a file of several
+    chunks with an ignored column, an empty known column, names that need quoting, and a
+    malformed row in the third chunk (the rows before it are out; exit 2 naming its line)."""
+    import random
+
+    from gsrwt_cli.records import view_from_values
+    from gsrwt_cli.report import params_row
+    from gsrwt_cli.sidecar import CHUNK_ROWS
+    from gsrwt_cli.tables import TableWriter
+
+    rng = random.Random(fmt)
+    lines, views = ["image,pan,tilt,focal,height,notes,roll"], []
+    for index in range(2 * CHUNK_ROWS + 300):
+        pan, tilt = f"{rng.uniform(-80, 80):.3f}", f"{rng.uniform(-80, 80):.3f}"
+        focal, height = f"{rng.uniform(100, 3000):.1f}", str(rng.randint(100, 4000))
+        name = f'"shot, {index}.jpg"' if index % 500 == 7 else f"img{index}.jpg"
+        lines.append(f"{name},{pan},{tilt},{focal},{height},whatever,")
+        views.append((name.strip('"'), {"pan": pan, "tilt": tilt, "focal": focal,
+                                        "height": height, "width": "640"}))
+    bad = 2 * CHUNK_ROWS + 100
+    lines[bad + 1] = 'broken,"10,5,300'  # an unclosed quote: the csv module refuses the rest
+    sidecar = tmp_path / "views.csv"
+    sidecar.write_text("\n".join(lines) + "\n")
+    result = gsrwt("params", "--sidecar", str(sidecar), "--width", "640", "-f", fmt)
+    assert result.returncode == 2
+    assert result.stderr.startswith(f"Error: {sidecar} line {bad + 2}")
+    expected = io.StringIO()
+    writer = TableWriter(expected, PARAMS_COLUMNS, fmt)
+    for image, values in views[:bad]:
+        writer.write_row(params_row(view_from_values(values, "x"), image))
+    writer.close()
+    assert result.stdout == expected.getvalue()

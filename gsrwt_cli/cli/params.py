@@ -41,8 +41,8 @@ def params(sidecar: Path | None, fmt: str | None, **kwargs: Any) -> None:
       gsrwt params --sidecar sample_data/views/views.csv --format json
     """
     from ..records import RecordError
-    from ..report import PARAMS_CHUNK, PARAMS_COLUMNS, ParamsBlock, params_row, params_rows
-    from ..sidecar import SidecarError, iter_sidecar_records
+    from ..report import PARAMS_COLUMNS, ParamsBlock, params_block, params_row, params_rows
+    from ..sidecar import SidecarError, iter_sidecar_chunks
     from ..tables import TableWriter
 
     defaults = view_defaults(kwargs)
@@ -52,38 +52,40 @@ def params(sidecar: Path | None, fmt: str | None, **kwargs: Any) -> None:
         writer.write_row(params_row(view_from_options(defaults)))
         writer.close()
         return
-    records = iter_sidecar_records(sidecar)
+    chunks = iter_sidecar_chunks(sidecar)
     try:
-        first = next(records, None)  # a file that cannot be read at all prints no table
+        first = next(chunks, None)  # a file that cannot be read at all prints no table
     except SidecarError as error:
         raise InputError(str(error)) from None
     writer = TableWriter(sys.stdout, PARAMS_COLUMNS, fmt, flush_rows=False)
-    last_error, block = None, []
+    last_error, rows = None, []
     try:
-        taken = chain([first] if first is not None else [], records)
-        rows = params_rows((record.image, record.merged(defaults), record.where)
-                           for record in taken)
-        for row in rows:
-            if isinstance(row, ParamsBlock):
-                writer.write_rows(block)
-                writer.write_columns(row.columns, row.count)
-                block = []
-            elif isinstance(row, RecordError):
-                if last_error is not None:
-                    report_error(last_error)
-                last_error = str(row)
-            else:
-                block.append(row)
-                if len(block) == PARAMS_CHUNK:
-                    writer.write_rows(block)
-                    block = []
+        for chunk in chain([first] if first is not None else [], chunks):
+            columns = chunk.text_columns()
+            block = None if columns is None else params_block(columns, defaults)
+            if block is not None:  # plain CSV rows: computed and written as columns
+                writer.write_columns(block.columns, block.count)
+                continue
+            for row in params_rows((record.image, record.merged(defaults), record.where)
+                                   for record in chunk.records()):
+                if isinstance(row, ParamsBlock):
+                    writer.write_rows(rows)
+                    writer.write_columns(row.columns, row.count)
+                    rows = []
+                elif isinstance(row, RecordError):
+                    if last_error is not None:
+                        report_error(last_error)
+                    last_error = str(row)
+                else:
+                    rows.append(row)
+            writer.write_rows(rows)
+            rows = []
     except SidecarError as error:
-        writer.write_rows(block)
+        writer.write_rows(rows)  # the rows before the fault
         writer.close()
         if last_error is not None:
             report_error(last_error)
         raise InputError(str(error)) from None
-    writer.write_rows(block)
     writer.close()
     if last_error is not None:
         raise InputError(last_error)
