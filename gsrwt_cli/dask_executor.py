@@ -269,6 +269,13 @@ def connect(address: str, workers: int, retries: int) -> Iterator[Client]:
                 # freed image memory for the next image (imaging.keep_freed_memory), as in
                 # the main thread of a pool's worker, instead of fresh pages per image.
                 "distributed.nanny.pre-spawn-environ.MALLOC_ARENA_MAX": 1,
+                # No dashboard, so nothing reads the workers' statistical profile (a stack
+                # sample every 10 ms) or their system monitor; the event loop's tick is
+                # only a health check. Off or slowed, the workers' other threads took 3 ms
+                # of CPU per 12 MP image instead of 10 (measured), and images 5 % less time.
+                "distributed.worker.profile.enabled": False,
+                "distributed.admin.system-monitor.interval": "2s",
+                "distributed.admin.tick.interval": "1s",
             }))
             try:
                 with _sigint_ignored():  # inherited: Ctrl-C is the client's to handle

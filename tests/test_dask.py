@@ -219,3 +219,25 @@ def test_closing_the_results_cancels_what_is_outstanding(cluster):
 
 if sys.platform != "linux":  # the kill and signal tests read /proc
     pytestmark = pytest.mark.skip("Linux only")
+
+
+def _worker_settings(dask_worker) -> dict:
+    """What a worker process runs with: its statistical profiler, memory and allocator."""
+    import dask
+
+    return {"profile": dask.config.get("distributed.worker.profile.enabled"),
+            "arenas": os.environ.get("MALLOC_ARENA_MAX"),
+            "profiling": dask_worker.periodic_callbacks.get("profile") is not None}
+
+
+def test_the_local_cluster_runs_its_workers_without_the_dashboards_profiler():
+    """The cluster gsrwt starts has no dashboard, so its workers sample no stacks (their
+    other threads took a third of the CPU they took with the profiler, measured), and keep
+    one malloc arena (freed image memory reused)."""
+    from gsrwt_cli.dask_executor import connect
+
+    with connect("local", 2, 1) as client:
+        settings = list(client.run(_worker_settings).values())
+    assert len(settings) == 2
+    assert all(found == {"profile": False, "arenas": "1", "profiling": False}
+               for found in settings), settings
