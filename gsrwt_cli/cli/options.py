@@ -17,19 +17,11 @@ from ..camera import VIEW_FIELDS
 from ..messages import one_line
 from ..storage import Location, location
 from ..tables import FORMATS
-from ..targets import (
-    DirectoryTargetError,
-    ExistingOutputError,
-    InputOverwriteError,
-    TargetError,
-    UncreatableDirectoryError,
-    UnwritableFileError,
-)
-from ..targets import make_output_directory as create_directory
 
 if TYPE_CHECKING:
     from ..camera import View
     from ..records import RecordError
+    from ..targets import TargetError
 
 F = TypeVar("F", bound=Callable[..., Any])
 
@@ -77,6 +69,14 @@ def view_from_options(values: dict[str, Any]) -> View:
 def target_message(error: TargetError, option: str | None = None) -> str:
     """A refused output in the user's terms: ``option`` is the flag that named the file, if
     one did; an existing file tells how to replace it."""
+    from ..targets import (  # only when something was refused: not on every start-up
+        DirectoryTargetError,
+        ExistingOutputError,
+        InputOverwriteError,
+        UncreatableDirectoryError,
+        UnwritableFileError,
+    )
+
     where = f"{option} {error.path}" if option else str(error.path)
     if isinstance(error, ExistingOutputError):
         return f"{where}: exists; use --overwrite to replace it"
@@ -93,6 +93,9 @@ def target_message(error: TargetError, option: str | None = None) -> str:
 
 def make_output_directory(option: str, directory: Path) -> None:
     """Create the output directory the user named, or stop with one line saying why not."""
+    from ..targets import TargetError
+    from ..targets import make_output_directory as create_directory
+
     try:
         create_directory(directory)
     except TargetError as error:

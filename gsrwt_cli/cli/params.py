@@ -42,7 +42,6 @@ def params(sidecar: Path | None, fmt: str | None, **kwargs: Any) -> None:
     """
     from ..records import RecordError
     from ..report import PARAMS_COLUMNS, ParamsBlock, params_block, params_row, params_rows
-    from ..sidecar import SidecarError, iter_sidecar_chunks
     from ..tables import TableWriter
 
     defaults = view_defaults(kwargs)
@@ -52,6 +51,8 @@ def params(sidecar: Path | None, fmt: str | None, **kwargs: Any) -> None:
         writer.write_row(params_row(view_from_options(defaults)))
         writer.close()
         return
+    from ..sidecar import SidecarError, iter_sidecar_chunks
+
     chunks = iter_sidecar_chunks(sidecar)
     try:
         first = next(chunks, None)  # a file that cannot be read at all prints no table
