@@ -18,6 +18,14 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from .bounds import (  # noqa: F401  (the bounds of a view, named here too)
+    DISTANCE_RANGE,
+    MAX_FOCAL_PX,
+    MAX_PRINCIPAL_POINT_PX,
+    MAX_SIDE_PX,
+    MIN_HORIZON_OFFSET_PX,
+    VIEW_FIELDS,
+)
 from .geometry import (
     GsrwtParameters,
     Matrix,
@@ -35,28 +43,6 @@ class ViewError(ValueError):
     def __init__(self, field_name: str, message: str) -> None:
         super().__init__(message)
         self.field = field_name
-
-
-#: Focal lengths (fx, fy) must be below this many pixels. The longest real ones are ~1e5-1e6
-#: (a 2000 mm lens on 2 um pixels is 1e6); the bound keeps ``f**2`` and ``f / sin(theta)``
-#: far from floating-point limits.
-MAX_FOCAL_PX = 1e7
-#: Image width and height: whole numbers of pixels, at most this many each.
-MAX_SIDE_PX = 1_000_000
-#: The principal point may lie outside the image (a crop), but within this many pixels of 0.
-MAX_PRINCIPAL_POINT_PX = 1e7
-#: ``distance`` (``Zc``, in the user's unit) must lie strictly between these. Twelve orders of
-#: magnitude either way of any unit (nanometres to terametres, in metres): no wall needs more,
-#: and ``Zc``, ``1/Zc`` and their products with focal lengths and scales stay finite.
-DISTANCE_RANGE = (1e-12, 1e12)
-#: The vanishing line (the horizon of the wall) must pass at least this many pixels from the
-#: principal point: ``a = f cos(theta) / sin(theta) >= 0.5`` (Eq. 4.16). Closer, the pixel at
-#: the principal point sees the horizon, so the point where the optical axis meets the wall
-#: (which anchors the output frame, Fig. 5.7) is beyond what the camera resolves, and the
-#: pixel homography, normalized at the principal point, divides by ``w ~ a`` that rounding
-#: errors of size ``1e-16 (|cx| + |cy|)`` swamp (pan = tilt = 89.9999999 at f = 300 has
-#: ``a = 9e-16`` px). Non-frontal views only.
-MIN_HORIZON_OFFSET_PX = 0.5
 
 
 def _as_number(name: str, value: object) -> float | int | None:
@@ -154,8 +140,6 @@ class Lens:
     def opencv_coefficients(self) -> np.ndarray:
         """The vector OpenCV's functions take (:meth:`opencv_names`)."""
         return np.array([self.value(name) for name in self.opencv_names()], dtype=np.float64)
-
-
 
 
 @dataclass(frozen=True)
@@ -328,12 +312,6 @@ class Pose:
     def foreshortening(self) -> float:
         """``cos theta = cos alpha cos beta`` (Eq. 4.15)."""
         return interception(self.pan, self.tilt)[1]
-
-
-#: The fields a sidecar row or the command line gives for one view, in the tables' order:
-#: the pose, then the intrinsics, then the distance (derived here, used everywhere).
-VIEW_FIELDS = ("pan", "tilt", "roll", "focal", "fx", "fy", "cx", "cy", "skew", "width", "height",
-               "distance")
 
 
 @dataclass(frozen=True, init=False)

@@ -26,8 +26,7 @@ from functools import cached_property
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-#: |pan| and |tilt| at or below this many degrees count as the frontal view (identity transform).
-FRONTAL_TOLERANCE_DEG = 1e-9
+from .bounds import FRONTAL_TOLERANCE_DEG
 
 Matrix = NDArray[np.float64]
 Points = NDArray[np.float64]

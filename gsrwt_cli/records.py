@@ -18,12 +18,8 @@ from functools import lru_cache
 from typing import Any
 
 from .camera import (
-    DISTANCE_RANGE,
     LENS_FIELDS,
     LENS_MODELS,
-    MAX_FOCAL_PX,
-    MAX_PRINCIPAL_POINT_PX,
-    MAX_SIDE_PX,
     VIEW_FIELDS,
     Intrinsics,
     Lens,
@@ -33,6 +29,7 @@ from .camera import (
 )
 from .geometry import pan_tilt_from_gsrwt
 from .messages import quote
+from .pinhole import SIMPLE_PINHOLE_FIELDS, pinhole_numbers  # noqa: F401  (named here too)
 from .poses import PoseError, distance_from_tvec, pose_from_quaternion, pose_from_rvec
 
 GSRWT_FIELDS = ("delta", "a", "gamma")
@@ -117,52 +114,10 @@ def _number(where: str, name: str, raw: Any) -> float:
     return value
 
 
-#: The fields of a record of a square-pixel pinhole with no roll, the common case that
-#: :func:`simple_pinhole_numbers` reads for tables of many views computed together.
-SIMPLE_PINHOLE_FIELDS = frozenset({"pan", "tilt", "focal", "cx", "cy", "width", "height",
-                                   "distance"})
-
-
 def simple_pinhole_numbers(values: Mapping[str, Any], where: str) -> tuple[float, ...] | None:
-    """``(pan, tilt, focal, cx, cy, width, height)`` of a record that gives only
-    :data:`SIMPLE_PINHOLE_FIELDS`, each well inside what :func:`view_from_values` accepts
-    (``nan`` for an unknown principal point or size); None for any other record, whose view
-    (or error) :func:`view_from_values` gives. The view's own last check (the horizon at
-    least :data:`~gsrwt_cli.camera.MIN_HORIZON_OFFSET_PX` from the principal point) is the
-    caller's."""
-    given = {name: raw for name, raw in values.items() if raw is not None and raw != ""}
-    if not given.keys() <= SIMPLE_PINHOLE_FIELDS or not {"pan", "tilt", "focal"} <= given.keys():
-        return None
-    number = {}
-    for name, raw in given.items():
-        try:
-            # ASCII without underscores: what float() then reads is what _number reads,
-            # or not finite (refused below); any other text goes the long way.
-            if type(raw) is str and raw.isascii() and "_" not in raw:
-                number[name] = float(raw)
-            else:
-                number[name] = _number(where, name, raw)
-        except (ValueError, RecordError):
-            return None
-    if not all(math.isfinite(value) for value in number.values()):
-        return None
-    pan, tilt, focal = number["pan"], number["tilt"], number["focal"]
-    if not (abs(pan) < 90 and abs(tilt) < 90 and 0 < focal < MAX_FOCAL_PX):
-        return None
-    if not DISTANCE_RANGE[0] < number.get("distance", 1.0) < DISTANCE_RANGE[1]:
-        return None
-    size = number.get("width"), number.get("height")
-    if any(side is not None and not (0 < side <= MAX_SIDE_PX and side == int(side))
-           for side in size):
-        return None
-    centre = number.get("cx"), number.get("cy")
-    if (centre[0] is None) != (centre[1] is None) or any(
-            value is not None and abs(value) >= MAX_PRINCIPAL_POINT_PX for value in centre):
-        return None
-    if centre[0] is None and None not in size:
-        centre = ((int(size[0]) - 1) / 2.0, (int(size[1]) - 1) / 2.0)  # as Intrinsics does
-    return (pan, tilt, focal, *(math.nan if value is None else value for value in centre),
-            *(math.nan if side is None else side for side in size))
+    """:func:`~gsrwt_cli.pinhole.pinhole_numbers` of a record, any value that is a number
+    read as :func:`view_from_values` reads it (numpy's scalars too)."""
+    return pinhole_numbers(values, where, _number)
 
 
 def view_from_values(values: Mapping[str, Any], where: str) -> View:

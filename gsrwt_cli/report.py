@@ -21,6 +21,7 @@ from .camera import (
     View,
 )
 from .geometry import parameter_arrays
+from .pinhole import PARAMS_COLUMNS  # noqa: F401  (named here too)
 from .records import (
     GSRWT_FIELDS,
     SIMPLE_PINHOLE_FIELDS,
@@ -35,29 +36,6 @@ if TYPE_CHECKING:
 #: Maps ``(N, 2)`` frontal-view pixels to the original image's, or gives None (no map).
 ToSource = Callable[[np.ndarray], "np.ndarray | None"]
 
-#: Columns of ``gsrwt params`` (a public contract, documented in the README).
-PARAMS_COLUMNS = (
-    "image",
-    "pan_deg",
-    "tilt_deg",
-    "focal_px",
-    "roll_deg",
-    "fx_px",
-    "fy_px",
-    "theta_deg",
-    "delta_deg",
-    "a_px",
-    "gamma_deg",
-    "vp_x",
-    "vp_y",
-    "vp_col",
-    "vp_row",
-    "vl_a",
-    "vl_b",
-    "vl_c",
-    "foreshortening",
-    "horizon_in_image",
-)
 
 
 def params_row(view: View, image: str | None = None) -> dict[str, Any]:

@@ -400,3 +400,50 @@ def test_a_big_plain_sidecar_through_the_command_is_its_views_row_by_row(tmp_pat
         writer.write_row(params_row(view_from_values(values, "x"), image))
     writer.close()
     assert result.stdout == expected.getvalue()
+
+
+def test_one_plain_view_computed_without_numpy_is_exactly_its_views_row():
+    """``gsrwt params`` with options computes a plain square-pixel pinhole by the math
+    module alone (:mod:`gsrwt_cli.pinhole`): for random options, frontal views, horizons near
+    the principal point and every combination of size and principal point, the row is
+    float for float and type for type what the view gives, and None exactly where the view
+    refuses (its error is then the view's)."""
+    import math
+    import random
+
+    from gsrwt_cli.pinhole import pinhole_numbers, pinhole_params_row
+    from gsrwt_cli.records import RecordError, view_from_values
+    from gsrwt_cli.report import params_row
+
+    rng = random.Random(11)
+    checked = refused = 0
+    for index in range(20_000):
+        values = {"pan": rng.choice([rng.uniform(-89.99, 89.99), 0.0, -0.0, 1e-10, 89.9999]),
+                  "tilt": rng.choice([rng.uniform(-89.99, 89.99), 0.0, 2e-9, -89.99999]),
+                  "focal": rng.choice([rng.uniform(0.1, 5000), 280.0, 1e-3])}
+        kind = index % 4
+        if kind in (1, 3):
+            values.update(width=rng.randint(1, 8000), height=rng.randint(1, 8000))
+        if kind in (2, 3):
+            values.update(cx=rng.uniform(-100, 9000), cy=rng.uniform(-100, 9000))
+        if index % 7 == 0:
+            values["distance"] = rng.uniform(0.01, 100)
+        numbers = pinhole_numbers(values, "options")
+        assert numbers is not None
+        row = pinhole_params_row(numbers)
+        try:
+            expected = params_row(view_from_values(values, "options"))
+        except RecordError:
+            assert row is None, values
+            refused += 1
+            continue
+        assert row is not None and list(row) == list(expected), values
+        for name, value in expected.items():
+            got = row[name]
+            assert type(got) is type(value), (name, values)
+            assert got == value or (isinstance(value, float) and math.isnan(value)
+                                    and math.isnan(got)), (name, values, got, value)
+        checked += 1
+    assert checked > 8_000 and refused > 1_000
+    assert pinhole_numbers({"pan": 10, "tilt": 5, "focal": 300, "roll": 2}, "x") is None
+    assert pinhole_numbers({"pan": 10, "tilt": 95, "focal": 300}, "x") is None

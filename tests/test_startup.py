@@ -35,9 +35,15 @@ def test_version_and_help_import_no_heavy_library(arguments):
     assert imported_top_level_modules(*arguments) & set(HEAVY) == set()
 
 
-def test_one_params_view_imports_numpy_only():
+def test_one_plain_params_view_imports_no_heavy_library():
     imported = imported_top_level_modules("params", "--pan", "10", "--tilt", "20",
-                                          "--focal", "500")
+                                          "--focal", "500", "--width", "640", "--height", "480")
+    assert imported & set(HEAVY) == set()
+
+
+def test_a_params_view_beyond_a_plain_pinhole_takes_the_views_way():
+    imported = imported_top_level_modules("params", "--pan", "10", "--tilt", "20",
+                                          "--focal", "500", "--roll", "3")
     assert imported & set(HEAVY) == {"numpy"}
 
 

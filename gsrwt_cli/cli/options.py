@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Any, TypeVar
 
 import click
 
-from ..camera import VIEW_FIELDS
+from ..bounds import VIEW_FIELDS
 from ..messages import one_line
 from ..storage import Location, location
 from ..tables import FORMATS
