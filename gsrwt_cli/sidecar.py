@@ -181,12 +181,15 @@ def iter_sidecar_records(path: str | Path) -> Iterator[Record]:
         yield from chunk.records()
 
 
-#: Data rows of a CSV sidecar read at a time by :func:`iter_sidecar_chunks`.
+#: Data rows of a CSV sidecar read at a time by :func:`iter_sidecar_chunks`, after a first
+#: chunk of :data:`FIRST_CHUNK_ROWS` (whose rows a reader of the output sees first).
 CHUNK_ROWS = 2048
+FIRST_CHUNK_ROWS = 256
 
 
 def iter_sidecar_chunks(path: str | Path, size: int = CHUNK_ROWS) -> Iterator[SidecarChunk]:
-    """:func:`iter_sidecar_records` as chunks of about ``size`` consecutive rows: a CSV or
+    """:func:`iter_sidecar_records` as chunks of ``size`` consecutive rows (the first of at
+    most :data:`FIRST_CHUNK_ROWS`): a CSV or
     TSV file's as it is read (:class:`CsvChunk`, whose cells a caller may also take as
     columns), a YAML file's all at once. Raises :class:`SidecarError` as that does, after the
     chunk of the rows before the fault."""
@@ -331,13 +334,14 @@ def _csv_chunks(path: Path, lines: Iterable[str], delimiter: str, size: int
                 )
             first_seen.setdefault(column, number)
         row_start = reader.line_num + 1
+        limit = min(size, FIRST_CHUNK_ROWS)  # the first rows out soon
         for cells in reader:
             rows.append(cells)
             starts.append(row_start)
             row_start = reader.line_num + 1
-            if len(rows) == size:
+            if len(rows) == limit:
                 yield CsvChunk(path, columns, rows, starts)
-                rows, starts = [], []
+                rows, starts, limit = [], [], size
     except csv.Error as error:
         if rows:
             yield CsvChunk(path, columns, rows, starts)

@@ -44,7 +44,12 @@ def _text_cells(values: list[Any], decimals: int) -> list[str]:
     if decimals <= 0:
         return [_text_value(value, decimals) for value in values]
     spec = f".{decimals}f"
-    if set(map(type, values)) == {float}:  # a column of numbers: in bulk
+    kinds = set(map(type, values))
+    if kinds == {str}:  # a column of names
+        return list(values)
+    if kinds <= {bool, type(None)}:  # a column of flags
+        return ["" if value is None else "true" if value else "false" for value in values]
+    if kinds == {float}:  # a column of numbers: in bulk
         cells = [format(value, spec).rstrip("0").rstrip(".") for value in values]
         fixed = _NOT_FINITE_OR_MINUS_ZERO.get
         return [fixed(cell, cell) for cell in cells]
