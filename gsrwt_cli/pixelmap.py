@@ -75,50 +75,63 @@ class LensDistortion:
              step: int | None = None, reuse: tuple[np.ndarray, np.ndarray] | None = None):
         """Maps (x, y; 32-bit float, which ``cv2.remap`` samples faster than fixed-point maps,
         measured) of every output pixel to its (distorted) input pixel: output -> ideal input
-        pixel (the homography's inverse) -> lens.
-
-        ``cv2.initUndistortRectifyMap`` computes ``K distort((newK R)^-1 o)``; with ``newK = I``
-        and ``R = output_from_ideal @ K`` that is the lens applied to ``K^-1 H^-1 o``. OpenCV
-        there ignores skew, so a skewed camera's maps are computed point by point instead.
+        pixel (the homography's inverse) -> lens; big frames' expanded from :meth:`grid`
+        (:meth:`expand`).
 
         ``reuse``: maps an earlier call returned for a frame of the same size, whose memory
         the new maps take over (writing fresh memory costs more than computing them).
         """
+        step = map_step(size) if step is None else step
+        grid = self.grid(output_from_ideal, size, step)
+        return grid if step == 1 else self.expand(grid, size, step, reuse)
+
+    def grid(self, output_from_ideal: np.ndarray, size: tuple[int, int], step: int
+             ) -> tuple[np.ndarray, np.ndarray]:
+        """The maps at every ``step``-th output pixel (every pixel for ``step = 1``), with one
+        point more than the output on every side, so that :meth:`expand` extrapolates none.
+
+        ``cv2.initUndistortRectifyMap`` computes ``K distort((newK R)^-1 o)``; with ``newK = I``
+        and ``R = output_from_ideal @ K`` that is the lens applied to ``K^-1 H^-1 o``. OpenCV
+        there ignores skew, so a skewed camera's maps are computed point by point instead.
+        """
         k = self._k
         width, height = size
-        if step is None:  # big frames from a grid (MAP_STEP), small ones pixel by pixel
-            step = MAP_STEP if min(width, height) >= 64 * MAP_STEP else 1
         # Grid point (i, j) is output pixel (step (i - 1) + step/2 - 1/2, ...): the positions
-        # from which cv2.resize(fx = step) interpolates every output pixel, with one point
-        # more than the output on every side, so that none is extrapolated.
+        # from which cv2.resize(fx = step) interpolates every output pixel.
         offset = step / 2 - 0.5 - (step if step > 1 else 0)
         output_from_grid = np.array([[step, 0.0, offset], [0.0, step, offset], [0.0, 0.0, 1.0]])
-        rotation = (np.linalg.inv(output_from_grid)
-                    @ np.asarray(output_from_ideal, dtype=np.float64) @ k)
+        grid = size if step == 1 else (-(-width // step) + 3, -(-height // step) + 3)
         if k[0, 1] == 0:
+            rotation = (np.linalg.inv(output_from_grid)
+                        @ np.asarray(output_from_ideal, dtype=np.float64) @ k)
             initialize = (cv2.fisheye.initUndistortRectifyMap if self.fisheye
                           else cv2.initUndistortRectifyMap)
-            grid = size if step == 1 else (-(-width // step) + 3, -(-height // step) + 3)
-            coarse = initialize(k, self._d, rotation, np.eye(3), grid, cv2.CV_32FC1)
-            if step == 1:
-                return coarse
-            # Views into the resized grid (cv2.remap takes row-strided maps as they are).
-            padded = (grid[1] * step, grid[0] * step)
-            targets = [None, None]
-            if reuse is not None and all(part.base is not None and part.base.shape == padded
-                                         for part in reuse):
-                targets = [part.base for part in reuse]
-            return tuple(cv2.resize(part, None, dst=target, fx=step, fy=step,
-                                    interpolation=cv2.INTER_LINEAR)
-                         [step:step + height, step:step + width]
-                         for part, target in zip(coarse, targets))
-        cols, rows = np.meshgrid(np.arange(width, dtype=np.float64),
-                                 np.arange(height, dtype=np.float64))
-        outputs = np.column_stack([cols.ravel(), rows.ravel()])
+            return initialize(k, self._d, rotation, np.eye(3), grid, cv2.CV_32FC1)
+        cols, rows = np.meshgrid(np.arange(grid[0], dtype=np.float64),
+                                 np.arange(grid[1], dtype=np.float64))
+        outputs = map_points(output_from_grid, np.column_stack([cols.ravel(), rows.ravel()]))
         sources = self.distort(map_points(np.linalg.inv(output_from_ideal), outputs))
         sources = np.nan_to_num(sources, nan=-1e6, posinf=-1e6, neginf=-1e6)
-        return (sources[:, 0].reshape(height, width).astype(np.float32),
-                sources[:, 1].reshape(height, width).astype(np.float32))
+        return (sources[:, 0].reshape(grid[1], grid[0]).astype(np.float32),
+                sources[:, 1].reshape(grid[1], grid[0]).astype(np.float32))
+
+    @staticmethod
+    def expand(grid: tuple[np.ndarray, np.ndarray], size: tuple[int, int], step: int,
+               reuse: tuple[np.ndarray, np.ndarray] | None = None
+               ) -> tuple[np.ndarray, np.ndarray]:
+        """Every output pixel's map, interpolated bilinearly from :meth:`grid`'s (views into
+        the resized grid: ``cv2.remap`` takes row-strided maps as they are), into the memory
+        of ``reuse`` when that is an earlier expansion of the same size."""
+        width, height = size
+        padded = (grid[0].shape[0] * step, grid[0].shape[1] * step)
+        targets = [None, None]
+        if reuse is not None and all(part.base is not None and part.base.shape == padded
+                                     for part in reuse):
+            targets = [part.base for part in reuse]
+        return tuple(cv2.resize(part, None, dst=target, fx=step, fy=step,
+                                interpolation=cv2.INTER_LINEAR)
+                     [step:step + height, step:step + width]
+                     for part, target in zip(grid, targets))
 
 
 #: Lens maps of big frames are computed on a grid of every ``MAP_STEP``-th output pixel and
@@ -126,22 +139,35 @@ class LensDistortion:
 #: (tested) at a sixteenth of the cost.
 MAP_STEP = 4
 
+def map_step(size: tuple[int, int]) -> int:
+    """Every how many output pixels a frame's lens maps are computed: big frames on a grid
+    of :data:`MAP_STEP` (then interpolated), small ones at every pixel."""
+    return MAP_STEP if min(size) >= 64 * MAP_STEP else 1
+
+
 #: Bytes of remap maps a process keeps for poses it may see again (a 12-megapixel frame's
 #: maps take 96 MB, a 640x480 one's 2.5 MB): a robot's small frames keep some 80 poses.
 #: Maps over a quarter of this (frames over about 6 megapixels) are not kept beside others:
 #: only the last frame's, whose memory the next big frame's maps reuse (fresh memory costs
 #: page faults: 39 ms against 6 ms to expand a 12-megapixel frame's grid, measured).
 MAP_CACHE_BYTES = 200 * 2**20
+#: Bytes of big frames' grids (:meth:`LensDistortion.grid`, a sixteenth of their maps) a
+#: process keeps for poses it may see again: 8 poses of a 12-megapixel frame (6 MB each), whose
+#: maps are then only expanded, the lens model not evaluated again.
+GRID_CACHE_BYTES = 48 * 2**20
 
 
 class _MapCache:
     """A process's maps by (camera, pose, frame), least recently used first out, within
     :data:`MAP_CACHE_BYTES`: a pan-tilt unit revisits the same poses thousands of times.
-    Big frames' maps are :attr:`last` only (the memory of one frame's maps, reused)."""
+    Big frames' maps are :attr:`last` only (the memory of one frame's maps, reused), and
+    their grids are kept within ``grid_budget`` (:attr:`grids`)."""
 
-    def __init__(self, budget: int) -> None:
+    def __init__(self, budget: int, grid_budget: int = GRID_CACHE_BYTES) -> None:
         self.budget = budget
+        self.grid_budget = grid_budget
         self.entries: OrderedDict[tuple, tuple[np.ndarray, np.ndarray]] = OrderedDict()
+        self.grids: OrderedDict[tuple, tuple[np.ndarray, np.ndarray]] = OrderedDict()
         self.last: tuple[tuple, tuple[np.ndarray, np.ndarray]] | None = None
         self.hits = self.misses = 0
 
@@ -154,13 +180,25 @@ class _MapCache:
             self.hits += 1
             self.entries.move_to_end(key)
             return self.entries[key]
-        self.misses += 1
-        if size[0] * size[1] * 8 > self.budget // 4:  # 2 float maps
+        step = map_step(size)
+        if size[0] * size[1] * 8 > self.budget // 4 and step > 1:  # 2 float maps
             reuse = self.last[1] if self.last is not None and self.last[0][2] == size else None
             self.last = None  # a frame of another size: its memory goes first
-            maps = lens.maps(homography, size, reuse=reuse)
+            grid = self.grids.get(key)
+            if grid is None:
+                self.misses += 1
+                grid = lens.grid(homography, size, step)
+                self.grids[key] = grid
+                while len(self.grids) > 1 and sum(
+                        a.nbytes + b.nbytes for a, b in self.grids.values()) > self.grid_budget:
+                    self.grids.popitem(last=False)
+            else:
+                self.hits += 1
+                self.grids.move_to_end(key)
+            maps = lens.expand(grid, size, step, reuse)
             self.last = key, maps
             return maps
+        self.misses += 1
         maps = lens.maps(homography, size)
         self.entries[key] = maps
         while len(self.entries) > 1 and self._bytes() > self.budget:
@@ -172,6 +210,7 @@ class _MapCache:
 
     def clear(self) -> None:
         self.entries.clear()
+        self.grids.clear()
         self.last = None
         self.hits = self.misses = 0
 

@@ -523,6 +523,35 @@ def test_big_frames_maps_reuse_the_last_frames_memory_and_stay_exact():
     assert MAP_CACHE is not cache
 
 
+def test_big_frames_revisited_poses_take_their_grid_from_the_cache():
+    """A pan-tilt unit's cycle of poses on big frames: a pose seen before (not last) is
+    expanded from its kept grid, without evaluating the lens again, into the last frame's
+    memory, and its maps are exactly a fresh computation's; the grids stay within their
+    budget, oldest out first."""
+    from gsrwt_cli.framing import lens_distortion
+    from gsrwt_cli.pixelmap import _MapCache
+    from gsrwt_cli.rectify import plan_image
+
+    lens_model = Lens("plumb_bob", (("k1", -0.2), ("k2", 0.05)))
+    plans = [plan_image(View(pan, 10, 1800, lens=lens_model), 1600, 1200)
+             for pan in (15, 25, 35)]
+    size = plans[0].size
+    lens = lens_distortion(plans[0].view)
+    one_grid = 2 * 4 * (-(-size[0] // 4) + 3) * (-(-size[1] // 4) + 3)
+    cache = _MapCache(budget=4 * size[0] * size[1] * 8 - 1, grid_budget=2 * one_grid)
+    first = cache.get(lens, plans[0].homography, size)
+    cache.get(lens, plans[1].homography, size)
+    again = cache.get(lens, plans[0].homography, size)  # revisited: from its grid
+    assert (cache.hits, cache.misses) == (1, 2)
+    assert again[0].base is first[0].base  # the last frame's memory, reused
+    for part, expected in zip(again, lens.maps(plans[0].homography, size)):
+        np.testing.assert_array_equal(part, expected)
+    cache.get(lens, plans[2].homography, size)  # a third pose: the oldest grid goes
+    assert len(cache.grids) == 2
+    cache.get(lens, plans[1].homography, size)
+    assert (cache.hits, cache.misses) == (1, 4)
+
+
 def test_lens_shrink_from_the_maps_matches_the_lens_projection():
     """The anti-aliasing's shrink through a lens is read off the warp's own maps; it agrees
     with finite differences of the lens projection (cv2.projectPoints) to 1 %."""
