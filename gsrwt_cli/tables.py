@@ -39,6 +39,10 @@ def _json_value(value: Any) -> Any:
 _NOT_FINITE_OR_MINUS_ZERO = {"nan": "", "inf": "", "-inf": "", "-0": "0"}
 
 
+#: A cell the csv module quotes, per format: the delimiter, a quote or a line break in it.
+_TO_QUOTE = {"csv": re.compile('[,"\r\n]'), "tsv": re.compile('[\t"\r\n]')}
+
+
 def _text_cells(values: list[Any], decimals: int) -> list[str]:
     """:func:`_text_value` of each value (finite floats, most cells, the short way)."""
     if decimals <= 0:
@@ -148,8 +152,7 @@ class TableWriter:
         cells = [_text_cells(list(columns.get(column, empty)), MACHINE_DECIMALS)
                  for column in self.columns]
         delimiter = "\t" if self.fmt == "tsv" else ","
-        special = re.compile(f'[{delimiter}"\r\n]')
-        if any(special.search("".join(column)) for column in cells):
+        if any(_TO_QUOTE[self.fmt].search("".join(column)) for column in cells):
             self._csv.writerows(zip(*cells))  # some cell to quote, as the csv module does
         else:
             self.stream.write("".join(f"{delimiter.join(row)}\n" for row in zip(*cells)))

@@ -447,3 +447,34 @@ def test_one_plain_view_computed_without_numpy_is_exactly_its_views_row():
     assert checked > 8_000 and refused > 1_000
     assert pinhole_numbers({"pan": 10, "tilt": 5, "focal": 300, "roll": 2}, "x") is None
     assert pinhole_numbers({"pan": 10, "tilt": 95, "focal": 300}, "x") is None
+
+
+def test_a_bad_value_after_plain_chunks_is_its_own_error_and_the_rest_are_printed(tmp_path, gsrwt):
+    """A row that is no valid view, deep in a big file after chunks computed as columns: its
+    chunk goes row by row, the error names its line, every other row (before and after it,
+    in that chunk and the next) is printed as its view gives it, and the exit status is 2."""
+    from gsrwt_cli.records import view_from_values
+    from gsrwt_cli.report import params_row
+    from gsrwt_cli.sidecar import CHUNK_ROWS
+    from gsrwt_cli.tables import TableWriter
+
+    lines, views = ["image,pan,tilt,focal"], []
+    for index in range(2 * CHUNK_ROWS):
+        pan, tilt = f"{(index % 170) - 85}.5", f"{(index * 7) % 170 - 85}.25"
+        lines.append(f"i{index}.jpg,{pan},{tilt},300")
+        views.append((f"i{index}.jpg", {"pan": pan, "tilt": tilt, "focal": "300"}))
+    bad = CHUNK_ROWS + 77
+    lines[bad + 1] = f"i{bad}.jpg,10,95,300"
+    sidecar = tmp_path / "views.csv"
+    sidecar.write_text("\n".join(lines) + "\n")
+    result = gsrwt("params", "--sidecar", str(sidecar), "-f", "csv")
+    assert result.returncode == 2
+    (line,) = result.stderr.splitlines()
+    assert line.startswith(f"Error: {sidecar} line {bad + 2}, field 'tilt'")
+    expected = io.StringIO()
+    writer = TableWriter(expected, PARAMS_COLUMNS, "csv")
+    for index, (image, values) in enumerate(views):
+        if index != bad:
+            writer.write_row(params_row(view_from_values(values, "x"), image))
+    writer.close()
+    assert result.stdout == expected.getvalue()

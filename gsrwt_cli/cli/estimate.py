@@ -15,13 +15,14 @@ from ..estimate import WALL_CHOICES
 from ..estimation import ESTIMATE_COLUMNS, EstimateJob, EstimateOptions, run_estimates
 from ..messages import one_line
 from ..records import load_camera_file
-from ..sidecar import SidecarError, display_path, load_sidecar
+from ..sidecar import SidecarError, display_path
 from ..tables import FORMATS, TableWriter, format_from_extension
 from ..targets import Drawings
 from .options import (
     VIEW_OPTIONS,
     InputError,
     field_options,
+    load_sidecar_option,
     make_output_directory,
     report_error,
     resolve_format,
@@ -102,12 +103,7 @@ def estimate(inputs: tuple[str, ...], output: str | None, fmt: str | None, recur
                                      "or .md, or give --format", param_hint="'-o'")
     else:
         table_format, output = resolve_format(fmt), "-"
-    loaded = None
-    if sidecar is not None:
-        try:
-            loaded = load_sidecar(sidecar)
-        except SidecarError as error:
-            raise InputError(str(error)) from None
+    loaded = load_sidecar_option(sidecar)
     if camera.get("camera"):
         try:
             load_camera_file(str(camera["camera"]))

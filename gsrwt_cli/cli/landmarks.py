@@ -32,7 +32,6 @@ from ..landmarks.ght import DEFAULT_MATCH_THRESHOLD
 from ..landmarks.hough import DEFAULT_MAX_GAP, DEFAULT_MIN_LENGTH, ORIENTATIONS
 from ..messages import quote
 from ..report import LINES_COLUMNS, MATCH_COLUMNS, line_row, match_row
-from ..sidecar import SidecarError, load_sidecar
 from ..sources import sources_from_directory
 from ..tables import TableWriter
 from ..targets import Drawings
@@ -42,6 +41,7 @@ from .options import (
     edge_threshold_option,
     format_option,
     images_argument,
+    load_sidecar_option,
     make_output_directory,
     raw_views_sidecar_option,
     report_error,
@@ -66,11 +66,7 @@ def _image_paths(images: tuple[Path, ...]) -> list[Path]:
 
 def _sources(paths: list[Path], sidecar: Path | None, view_kwargs: dict[str, Any]):
     """Canonical views of ``paths``, with the parameters of ``sidecar`` and the options."""
-    try:
-        loaded = load_sidecar(sidecar) if sidecar is not None else None
-    except SidecarError as error:
-        raise InputError(str(error)) from None
-    return canonical_views(paths, loaded, view_defaults(view_kwargs))
+    return canonical_views(paths, load_sidecar_option(sidecar), view_defaults(view_kwargs))
 
 
 def _start_drawings(draw: Path | None, inputs: list[Path]) -> Drawings | None:

@@ -21,6 +21,7 @@ from ..tables import FORMATS
 if TYPE_CHECKING:
     from ..camera import View
     from ..records import RecordError
+    from ..sidecar import Sidecar
     from ..targets import TargetError
 
 F = TypeVar("F", bound=Callable[..., Any])
@@ -64,6 +65,19 @@ def view_from_options(values: dict[str, Any]) -> View:
         return view_from_values(values, "options")
     except RecordError as error:
         raise InputError(option_message(error)) from None
+
+
+def load_sidecar_option(sidecar: Path | None) -> Sidecar | None:
+    """The ``--sidecar`` the user named, loaded (None without one), or an
+    :class:`InputError` saying what is wrong with the file."""
+    if sidecar is None:
+        return None
+    from ..sidecar import SidecarError, load_sidecar
+
+    try:
+        return load_sidecar(sidecar)
+    except SidecarError as error:
+        raise InputError(str(error)) from None
 
 
 def target_message(error: TargetError, option: str | None = None) -> str:

@@ -50,7 +50,6 @@ from ..messages import one_line, quote
 from ..outputs import open_atomic, remove_stale_temporaries
 from ..records import load_camera_file
 from ..rectify import MissingDistanceError
-from ..sidecar import SidecarError, load_sidecar
 from ..sources import (
     Source,
     source_from_listed_path,
@@ -66,7 +65,7 @@ from ..tables import (
     shard_slice,
     shard_table_name,
 )
-from .options import InputError, PathOrUrl, view_defaults, view_options
+from .options import InputError, PathOrUrl, load_sidecar_option, view_defaults, view_options
 
 
 def parse_bbox(text: str) -> str | tuple[float, float, float, float]:
@@ -492,12 +491,7 @@ def rectify(
                 param_hint="'--table'",
             )
 
-    loaded = None
-    if sidecar is not None:
-        try:
-            loaded = load_sidecar(sidecar)
-        except SidecarError as error:
-            raise InputError(str(error)) from None
+    loaded = load_sidecar_option(sidecar)
     sources, unreadable = collect_sources(inputs, recursive)
     if not sources and not unreadable:
         raise InputError(f"no images found in {' '.join(inputs)}")
