@@ -3,7 +3,8 @@ seen at an angle, rectified by ``gsrwt rectify --auto`` with no focal length giv
 
 Measured in the output: the floors' long horizontal edges (LSD) must be horizontal, the
 columns of dark gaps between the facade's panels vertical (their positions floor by floor),
-and the panels of each floor equally wide (the left half of a row against the right half).
+and the panels of each floor equally wide (their front edges' spacing in the left half of a
+row against the right half).
 """
 
 from __future__ import annotations
@@ -49,18 +50,21 @@ def band_profile(grey: np.ndarray, top: float, bottom: float) -> np.ndarray:
     return profile - np.convolve(profile, np.ones(151) / 151, "same")
 
 
-def gaps(profile: np.ndarray) -> np.ndarray:
-    """Columns of the dark gaps between panels: minima of a floor's profile 25 grey levels
-    below their surroundings, the first of a close pair (a gap and its shadow) kept."""
-    smooth = np.convolve(profile, np.ones(3) / 3, "same")
-    found = [x for x in range(5, len(smooth) - 5)
-             if smooth[x] == smooth[x - 5:x + 6].min()
-             and smooth[x] < np.median(smooth[max(0, x - 40):x + 40]) - 25]
-    kept: list[int] = []
-    for x in found:
-        if not kept or x - kept[-1] >= 20:
-            kept.append(x)
-    return np.array([x + _vertex(smooth[x - 1:x + 2]) for x in kept])
+def panel_edges(profile: np.ndarray, separation: int = 30) -> np.ndarray:
+    """Columns of the panels' left front edges: the sharpest rises of a floor's profile
+    (dark recess to the white face, left to right), each the steepest within ``separation``
+    pixels and at least 40 % of the row's steepest, to a tenth of a pixel.
+
+    The panels stand proud of the recesses between them, so the recesses show more of their
+    windows toward the near end of the facade and their darkest column is no fixed point on
+    the wall; a panel's front edge is, and all of them lie in one plane parallel to the wall.
+    Seen from the facade's right, the left edges are the sharp ones (the right edges have the
+    panel's own side beyond them)."""
+    slope = np.gradient(np.convolve(profile, np.ones(3) / 3, "same"))
+    least = 0.4 * np.percentile(slope, 99.5)
+    found = [x for x in range(separation, len(slope) - separation)
+             if slope[x] == slope[x - separation:x + separation + 1].max() and slope[x] > least]
+    return np.array([x + _vertex(slope[x - 1:x + 2]) for x in found])
 
 
 def _vertex(three: np.ndarray) -> float:
@@ -70,15 +74,25 @@ def _vertex(three: np.ndarray) -> float:
     return float(np.clip(0.5 * (a - c) / curvature, -0.5, 0.5)) if curvature else 0.0
 
 
-def widths_left_right(columns: np.ndarray) -> tuple[float, float]:
-    """Mean panel width in the left and the right half of a row (spacings within 25 % of the
-    median, so that a missed or doubled gap does not count)."""
-    spacing = np.diff(columns)
-    middle = (columns[:-1] + columns[1:]) / 2
-    usual = np.abs(spacing / np.median(spacing) - 1) < 0.25
-    spacing, middle = spacing[usual], middle[usual]
-    half = np.median(middle)
-    return float(spacing[middle < half].mean()), float(spacing[middle >= half].mean())
+def panel_pitch(edges: np.ndarray) -> float | None:
+    """The width of the panels whose edges are ``edges`` (sorted columns): the least-squares
+    slope of column against panel number, the panel numbers counted from the spacings (in
+    the usual spacing, the median of the shorter ones: a missed edge doubles one), and edges
+    more than 8 % of a panel off that lattice (a window's edge) left out.
+    None with fewer than three edges on it."""
+    if len(edges) < 3:
+        return None
+    spacing = np.diff(edges)
+    pitch = float(np.median(spacing[spacing <= 1.5 * np.percentile(spacing, 25)]))
+    number = np.concatenate([[0.0], np.cumsum(np.round(spacing / pitch))])
+    on_lattice = np.ones(len(edges), dtype=bool)
+    for _ in range(3):
+        start = np.median(edges[on_lattice] - pitch * number[on_lattice])
+        on_lattice = np.abs(edges - start - pitch * number) < 0.08 * pitch
+        if on_lattice.sum() < 3 or np.ptp(number[on_lattice]) == 0:
+            return None
+        pitch = float(np.polyfit(number[on_lattice], edges[on_lattice], 1)[0])
+    return pitch
 
 
 def _peak(values: np.ndarray, lags: np.ndarray) -> float:
@@ -173,30 +187,51 @@ def test_rows_are_horizontal_and_columns_vertical_within_half_a_degree(rectified
     assert abs(np.median(leans)) <= 0.5
 
 
+def half_row_ratio(edges: np.ndarray) -> float | None:
+    """The panels' width in the right half of a row over the left half's, minus 1 (0 when
+    they are equal); None when a half has too few edges on its lattice."""
+    middle = np.median(edges)
+    left, right = panel_pitch(edges[edges <= middle]), panel_pitch(edges[edges >= middle])
+    return None if left is None or right is None else right / left - 1
+
+
 def row_width_ratios(grey: np.ndarray) -> list[float]:
-    """Per floor with 5 or more panels: mean panel width in the row's right half over its
-    left half, minus 1 (0 for a frontal view)."""
+    """:func:`half_row_ratio` of every floor with six or more panel edges."""
     ratios = []
-    for band in facade_floors(grey):
-        raw = grey[int(band[0] + 0.25 * (band[1] - band[0])):
-                   int(band[1] - 0.25 * (band[1] - band[0]))].astype(np.float64).mean(axis=0)
-        columns = gaps(raw)
-        if len(columns) >= 6:
-            left, right = widths_left_right(columns)
-            ratios.append(right / left - 1)
+    for top, bottom in facade_floors(grey):
+        edges = panel_edges(grey[int(top + 0.25 * (bottom - top)):
+                                 int(bottom - 0.25 * (bottom - top))].mean(axis=0))
+        ratio = half_row_ratio(edges) if len(edges) >= 6 else None
+        if ratio is not None:
+            ratios.append(ratio)
     return ratios
 
 
 def test_panels_along_a_row_are_equally_wide(rectified):
-    """The issue asks for 2 %. Measured: 3.0, 0.2, 2.2 and 2.0 % on the four floors with
-    five or more panels, of either sign (11 % in the photo); the measure itself moves by
-    about 1 % between nearly equal poses (a gap's shadow found or not), so this asserts
-    what it can tell: under 2.5 % typically and 3.5 % at worst."""
+    """The issue's goal: equal within 2 % along a row. Measured: 1.0, -0.4, -0.8 and 0.5 %
+    on the four floors with six or more panel edges (in the photo: 57 % on the third)."""
     grey, _ = rectified
     ratios = row_width_ratios(grey)
-    assert len(ratios) >= 3
-    assert np.median(np.abs(ratios)) <= 0.025
-    assert max(np.abs(ratios)) <= 0.035
+    assert len(ratios) >= 4
+    assert max(np.abs(ratios)) <= 0.02
+
+
+def test_the_measure_tells_a_pan_one_degree_off(rectified, tmp_path):
+    """The same measure on the facade rectified with the estimated pose but the pan one
+    degree off either way: the panels shrink toward one end by 2-4 %, so a 2 % goal is a
+    pan within about half a degree. (Measured at +-0.5 degrees: 2.5 % at worst.)"""
+    _, row = rectified
+    for offset, sign in ((-1.0, 1), (1.0, -1)):
+        out = tmp_path / f"pan{offset:+}"
+        result = run_gsrwt("rectify", str(BUILDING), "--pan", str(float(row["pan_deg"]) + offset),
+                           "--tilt", row["tilt_deg"], "--roll", row["roll_deg"], "--focal",
+                           row["focal_px"], "--bbox", "full", "--max-size", "1600x1200", "-o",
+                           str(out), "-q")
+        assert result.returncode == 0, result.stderr
+        ratios = np.array(row_width_ratios(cv2.imread(str(out / "building.jpg"),
+                                                      cv2.IMREAD_GRAYSCALE)))
+        assert len(ratios) >= 3
+        assert np.median(sign * ratios) > 0.015 and max(np.abs(ratios)) > 0.025
 
 
 def test_the_measure_can_fail_on_the_photo_itself():
@@ -205,9 +240,11 @@ def test_the_measure_can_fail_on_the_photo_itself():
     lines, lengths, angles = segments(grey)
     _, horizontal = floors(lines, lengths, angles, grey.shape[1])
     assert len(horizontal) == 0 or abs(np.median(horizontal)) > 0.5
-    raw = grey[200:230].astype(np.float64).mean(axis=0)  # the third floor of panels
-    left, right = widths_left_right(gaps(raw))
-    assert abs(right / left - 1) > 0.08
+    edges = panel_edges(grey[200:230].mean(axis=0), separation=15)  # the third floor
+    spacing = np.diff(edges)
+    middle = (edges[:-1] + edges[1:]) / 2
+    half = np.median(middle)
+    assert np.median(spacing[middle >= half]) / np.median(spacing[middle < half]) - 1 > 0.3
 
 
 def test_the_lens_is_removed_on_real_photos_of_a_chessboard():
