@@ -16,12 +16,18 @@ costs), and the time on 13 real 640x480 photos (OpenCV's chessboard photos in te
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import time
 from pathlib import Path
 
-import cv2
-import numpy as np
+from gsrwt_cli.cli import BLAS_THREAD_VARIABLES
+
+for _variable in BLAS_THREAD_VARIABLES:  # numpy as the gsrwt command runs it (cli.run)
+    os.environ.setdefault(_variable, "1")
+
+import cv2  # noqa: E402
+import numpy as np  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
 from estimate_scenes import Shot, angle_between, random_shots  # noqa: E402

@@ -6,13 +6,14 @@ cause, in real subprocesses: which heavy libraries a command line imports.
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
 
 import click
 import pytest
 
-from gsrwt_cli.cli import COMMANDS, main
+from gsrwt_cli.cli import BLAS_THREAD_VARIABLES, COMMANDS, main
 
 HEAVY = ("numpy", "cv2", "yaml", "tqdm", "PIL", "imagesize")
 
@@ -69,3 +70,36 @@ def test_the_group_help_lists_every_command():
     listed = [line.split()[0] for line in result.stdout.split("Commands:", 1)[1].splitlines()
               if line.strip()]
     assert listed == sorted(COMMANDS)
+
+
+BLAS_THREADS = """
+import os, sys
+if sys.argv[1] == "command":
+    sys.argv = ["gsrwt", "--version"]
+    from gsrwt_cli.cli import run
+    try:
+        run()
+    except SystemExit:
+        pass
+import numpy
+print(len(os.listdir("/proc/self/task")))
+"""
+
+
+@pytest.mark.skipif(not os.path.isdir("/proc/self/task") or (os.cpu_count() or 1) < 2,
+                    reason="counts a process's threads in /proc; needs 2 or more cores")
+def test_the_command_gives_numpy_one_blas_thread_unless_the_user_set_theirs():
+    """The ``gsrwt`` command runs a worker process per core, and OpenBLAS would start a
+    thread per core in each (threads that spin after every small product, doubling the CPU
+    time of ``estimate``): under the command numpy loads with one; a user's own
+    ``OPENBLAS_NUM_THREADS`` is kept, and a plain ``import numpy`` has its usual threads."""
+    def threads(mode: str, **environment: str) -> int:
+        env = {name: value for name, value in os.environ.items()  # OMP_, GOTO_ too
+               if name not in BLAS_THREAD_VARIABLES and not name.endswith("_NUM_THREADS")}
+        result = subprocess.run([sys.executable, "-c", BLAS_THREADS, mode], capture_output=True,
+                                text=True, check=True, env={**env, **environment})
+        return int(result.stdout.split()[-1])
+
+    assert threads("command") == 1
+    assert threads("command", OPENBLAS_NUM_THREADS="2") == 2
+    assert threads("library") == min(os.cpu_count() or 1, 64)
