@@ -16,15 +16,13 @@ costs), and the time on 13 real 640x480 photos (OpenCV's chessboard photos in te
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 import time
 from pathlib import Path
 
-from gsrwt_cli.cli import BLAS_THREAD_VARIABLES
+from gsrwt_cli.cli import one_blas_thread
 
-for _variable in BLAS_THREAD_VARIABLES:  # numpy as the gsrwt command runs it (cli.run)
-    os.environ.setdefault(_variable, "1")
+one_blas_thread()  # numpy as the gsrwt command runs it (cli.run)
 
 import cv2  # noqa: E402
 import numpy as np  # noqa: E402

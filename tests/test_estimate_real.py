@@ -43,10 +43,15 @@ def floors(lines: np.ndarray, lengths: np.ndarray, angles: np.ndarray, width: in
     return [float(np.mean(c)) for c in clusters], angles[long]
 
 
-def band_profile(grey: np.ndarray, top: float, bottom: float) -> np.ndarray:
-    """Mean grey of each column over the middle half of one floor, its slow trend removed."""
+def middle_profile(grey: np.ndarray, top: float, bottom: float) -> np.ndarray:
+    """Mean grey of each column over the middle half of one floor."""
     band = grey[int(top + 0.25 * (bottom - top)):int(bottom - 0.25 * (bottom - top))]
-    profile = band.astype(np.float64).mean(axis=0)
+    return band.astype(np.float64).mean(axis=0)
+
+
+def band_profile(grey: np.ndarray, top: float, bottom: float) -> np.ndarray:
+    """:func:`middle_profile` with its slow trend removed."""
+    profile = middle_profile(grey, top, bottom)
     return profile - np.convolve(profile, np.ones(151) / 151, "same")
 
 
@@ -199,8 +204,7 @@ def row_width_ratios(grey: np.ndarray) -> list[float]:
     """:func:`half_row_ratio` of every floor with six or more panel edges."""
     ratios = []
     for top, bottom in facade_floors(grey):
-        edges = panel_edges(grey[int(top + 0.25 * (bottom - top)):
-                                 int(bottom - 0.25 * (bottom - top))].mean(axis=0))
+        edges = panel_edges(middle_profile(grey, top, bottom))
         ratio = half_row_ratio(edges) if len(edges) >= 6 else None
         if ratio is not None:
             ratios.append(ratio)

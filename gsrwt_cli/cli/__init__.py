@@ -198,6 +198,17 @@ def _end_for_closed_stdout() -> NoReturn:
 BLAS_THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
 
 
+def one_blas_thread() -> None:
+    """Give numpy one BLAS thread per process (:data:`BLAS_THREAD_VARIABLES`), unless the
+    user set their own; OpenBLAS and MKL read these when numpy loads, so call it first.
+
+    gsrwt's parallelism is a worker process per core (``-j``). numpy's BLAS would add a
+    thread per core to each, and those threads spin after every small matrix product: twice
+    the CPU for the same work, and ``estimate -j 2`` took 1.9 times as long."""
+    for variable in BLAS_THREAD_VARIABLES:
+        os.environ.setdefault(variable, "1")
+
+
 class CommandProcess:
     """The context object of a process the ``gsrwt`` command started (not a library user's
     or a test's): there the batch may fork its workers from the main process, which has run
@@ -216,12 +227,7 @@ def run() -> None:
     # OpenCV's own log lines would break the one-line-per-problem promise; what gsrwt needs
     # from the codecs it collects itself. OpenCV reads this when it is first imported.
     os.environ["OPENCV_LOG_LEVEL"] = "SILENT"
-    # gsrwt's parallelism is a worker process per core (-j). numpy's BLAS would add a thread
-    # per core to each, and those threads spin after every small matrix product: twice the
-    # CPU for the same work, and `estimate -j 2` took 1.9 times as long. One BLAS thread per
-    # process, unless the user set their own; OpenBLAS and MKL read these when they load.
-    for variable in BLAS_THREAD_VARIABLES:
-        os.environ.setdefault(variable, "1")
+    one_blas_thread()
     if "cv2" in sys.modules:
         from ..imaging import silence_opencv_logging
 
