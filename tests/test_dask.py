@@ -241,3 +241,27 @@ def test_the_local_cluster_runs_its_workers_without_the_dashboards_profiler():
     assert len(settings) == 2
     assert all(found == {"profile": False, "arenas": "1", "profiling": False}
                for found in settings), settings
+
+
+def test_ctrl_c_during_a_client_call_waits_for_it_and_logs_nothing(cluster, caplog):
+    """Ctrl-C landing inside a Dask client call before its coroutine has started (here: the
+    client's event loop held busy, as it is while the cluster starts or a batch of results
+    arrives) made distributed log a ``NameError`` traceback (its ``sync`` cancels a future it
+    has not yet made). gsrwt's stop waits until the call returns, then stops the batch."""
+    import _thread
+    import logging
+    import threading
+
+    from gsrwt_cli.cli.rectify import stop_on_signals
+
+    _, client = cluster
+    caplog.set_level(logging.ERROR)
+    client.loop.add_callback(time.sleep, 0.6)  # the loop busy: the call's coroutine waits
+    threading.Timer(0.2, _thread.interrupt_main, args=(signal.SIGINT,)).start()
+    finished = []
+    with pytest.raises(KeyboardInterrupt), stop_on_signals():
+        finished.append(client.nthreads())  # a sync() call, interrupted while it waits
+        time.sleep(5)  # the stop comes here, once the call has returned
+    assert finished and sum(finished[0].values()) == 2
+    errors = [record for record in caplog.records if record.levelno >= logging.ERROR]
+    assert not errors, [record.getMessage() for record in errors]

@@ -126,7 +126,10 @@ JPEG_VARIANTS = {
 
 def test_jpegs_decode_to_exactly_opencvs_pixels():
     """JPEGs are decoded by libjpeg-turbo's own API (simplejpeg): pixel for pixel what
-    cv2.imdecode gives, for real photos (grey and colour) and every chroma layout."""
+    cv2.imdecode gives, for real photos (grey and colour) and every chroma layout. Exact on
+    every CPU: both are libjpeg-turbo's accurate integer IDCT and fancy upsampling, whose
+    SIMD paths are bit for bit its C code (integer arithmetic; its own tests hold one
+    checksum per image whatever SIMD the CPU has)."""
     from pathlib import Path
 
     from gsrwt_cli.imaging import decode_image

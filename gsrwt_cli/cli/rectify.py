@@ -6,6 +6,7 @@ the core's errors in terms of those options.
 
 from __future__ import annotations
 
+import _thread
 import contextlib
 import csv
 import io
@@ -14,8 +15,10 @@ import os
 import signal
 import sys
 import tempfile
+import threading
 from collections.abc import Iterator
 from pathlib import Path, PurePosixPath
+from types import FrameType
 from typing import IO, Any
 
 import click
@@ -289,15 +292,35 @@ def end_batch(summary: str, where: str, stopped: BaseException | None, failed: i
         sys.exit(1)
 
 
+def _inside_a_dask_client_call(frame: FrameType | None) -> bool:
+    """Whether ``frame`` (the main thread's, when a signal came) is inside a blocking call of
+    a Dask client (``distributed.utils.sync``). An exception raised there before the call's
+    coroutine has started makes distributed log a ``NameError`` traceback (its ``sync``
+    cancels a future it has not made yet), so a stop waits until such a call returns."""
+    if "distributed.utils" not in sys.modules:
+        return False
+    while frame is not None:
+        if frame.f_code.co_name == "sync" and frame.f_globals.get("__name__") == (
+                "distributed.utils"):
+            return True
+        frame = frame.f_back
+    return False
+
+
 @contextlib.contextmanager
 def stop_on_signals() -> Iterator[None]:
-    """SIGINT raises KeyboardInterrupt and SIGTERM raises :class:`Terminated`, once.
+    """SIGINT raises KeyboardInterrupt and SIGTERM raises :class:`Terminated`, once, in the
+    main thread, outside any Dask client call (:func:`_inside_a_dask_client_call`).
 
     After the first, both are ignored until the block ends, so that the table of what
     finished is written whole even if the user presses Ctrl-C again.
     """
 
-    def stop(signum: int, frame: object) -> None:
+    def stop(signum: int, frame: FrameType | None) -> None:
+        if _inside_a_dask_client_call(frame):
+            # Delivered again in 50 ms, until the call has returned.
+            threading.Timer(0.05, _thread.interrupt_main, args=(signum,)).start()
+            return
         signal.signal(signal.SIGINT, signal.SIG_IGN)
         signal.signal(signal.SIGTERM, signal.SIG_IGN)
         raise KeyboardInterrupt if signum == signal.SIGINT else Terminated
