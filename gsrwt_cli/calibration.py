@@ -15,7 +15,10 @@ Formats
   ``image_width``, ``image_height`` (or ``cameraResolution: [w, h]`` as OpenCV's interactive
   calibration writes it). OpenCV's files do not name the lens model; an optional
   ``distortion_model`` string does (``equidistant``/``fisheye`` for ``cv2.fisheye``'s k1..k4).
-  Read by OpenCV's own parser, after checks that keep it safe (size, nesting).
+  Read in Python (YAML by :mod:`.safe_yaml`, XML by ``xml.etree`` without DOCTYPEs, JSON by
+  ``json``), never by OpenCV's parser, which trusts the file: a matrix with negative
+  ``sizes`` crashed the process. Every node is checked before it is used (sizes whole numbers
+  from 0, ``dt`` one channel, data as long as the sizes say, values of the type).
 - **ROS** ``camera_info`` (``camera_calibration_parsers``): ``image_width``,
   ``image_height``, ``camera_matrix: {rows: 3, cols: 3, data: [...]}``,
   ``distortion_model`` (``plumb_bob``, ``rational_polynomial``, ``equidistant``, and the
@@ -29,7 +32,10 @@ Convention
 pixel centres at integers), the convention of both formats; the skew ``K[0, 1]`` is kept.
 All-zero distortion is a pinhole (``lens`` None), as :class:`Intrinsics` makes it.
 
-Every problem is a :class:`CalibrationError` naming the file and the key.
+Every problem is a :class:`CalibrationError` naming the file and the key; what it quotes of
+the file is a short escaped token (:func:`~gsrwt_cli.messages.token`), since a sidecar may name
+any file (``/etc/passwd``). A local file must be a regular file: a FIFO or a device is refused
+unread.
 
 Over 400 lines: two formats, each read and written, with an error naming the key for every
 way a file can be wrong.
@@ -37,30 +43,37 @@ way a file can be wrong.
 
 from __future__ import annotations
 
+import json
 import math
 import numbers
+import os
 import re
+import stat
 from pathlib import Path
 from typing import Any
+from xml.etree import ElementTree
 
-import cv2
 import numpy as np
 import yaml
 
-from .camera import LENS_MODELS, Intrinsics, Lens, ViewError
-from .messages import one_line, quote
+from .camera import LENS_ALIASES, LENS_MODELS, Intrinsics, Lens, ViewError
+from .messages import one_line, quote, token
 from .safe_yaml import YamlInputError, load_yaml
-from .storage import open_input
+from .storage import location, open_input
 
 #: Calibration files larger than this are refused unread (a real one is a few kilobytes;
 #: OpenCV's sample with per-view extrinsics is 5 KB).
 MAX_FILE_BYTES = 1 << 20
-#: Deepest nesting of brackets or XML elements handed to OpenCV's parser (a calibration file
-#: needs 2). OpenCV's parsers recurse without a bound and crash the process (a segmentation
-#: fault, not an exception) on about 100 000 nested ``[`` or elements.
+#: Deepest nesting of brackets or XML elements read (a calibration file needs 2; the readers
+#: recurse).
 MAX_NESTING = 64
-#: Deepest indentation, in columns, of a line handed to OpenCV's YAML parser (block nesting).
+#: Deepest indentation, in columns, of a line read (YAML block nesting).
 MAX_INDENT = 256
+#: Largest ``rows``, ``cols`` or ``sizes`` entry read (a calibration matrix has 3 or 14).
+MAX_DIMENSION = 1_000_000
+#: OpenCV's element types (``dt``) of one channel, as numpy types: what a matrix may hold.
+_ELEMENT_TYPES = {"u": np.uint8, "c": np.int8, "w": np.uint16, "s": np.int16, "i": np.int32,
+                  "f": np.float32, "d": np.float64, "h": np.float16}
 #: The principal point may lie outside the image (a crop), but not more than this many image
 #: sides beyond it: further, the matrix does not describe an image of that size.
 MAX_PRINCIPAL_POINT_SIDES = 1.0
@@ -84,7 +97,14 @@ _OPENCV_SIGNS = re.compile(
     rb"\A\s*(%YAML:|<\?xml|<opencv_storage>)|!!opencv-(nd-)?matrix|\"opencv-(nd-)?matrix\""
 )
 _XML_TAG = re.compile(r"<(/?)[A-Za-z_][^\s/>]*[^>]*?(/?)>")
-_CV_WHERE = re.compile(r"^\((\d+)\): (.*)$", re.DOTALL)
+_XML_DECLARATION = re.compile(r"<!(?!--|\[CDATA\[)")
+_XML_TOKEN = re.compile(r'"[^"]*"|\S+')
+_YAML_HEADER = re.compile(r"\A%YAML[: ][^\r\n]*")
+_INTEGER = re.compile(r"[-+]?[0-9]+")
+_REAL = re.compile(r"[-+]?(?:(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][-+]?[0-9]+)?|\.(?:nan|inf))",
+                   re.IGNORECASE)
+#: A quoted part of a parser's message (PyYAML's, expat's): the file's content.
+_QUOTED = re.compile(r"'[^'\n]*'|\"[^\"\n]*\"")
 
 
 class CalibrationError(ValueError):
@@ -95,8 +115,8 @@ class CalibrationError(ValueError):
     def __init__(self, path: str | Path, key: str | None, reason: str) -> None:
         self.path, self.key, self.reason = str(path), key, reason
         where = one_line(self.path, 200)
-        if key is not None:
-            where = f"{where}: key {quote(key)}"
+        if key is not None:  # the keys read are at most 29 characters; others come from the file
+            where = f"{where}: key {quote(key, 40)}"
         super().__init__(f"{where}: {reason}")
 
 
@@ -120,13 +140,7 @@ def load_camera(path: str | Path) -> Intrinsics:
 
 
 def _read_text(path: str | Path) -> str:
-    try:
-        with open_input(path) as file:
-            data = file.read(MAX_FILE_BYTES + 1)
-    except IsADirectoryError:
-        raise CalibrationError(path, None, "is a directory, not a calibration file") from None
-    except OSError as error:
-        raise CalibrationError(path, None, f"cannot read ({error.strerror or error})") from None
+    data = _read_bytes(path)
     if len(data) > MAX_FILE_BYTES:
         raise CalibrationError(
             path, None, f"larger than {MAX_FILE_BYTES} bytes: not a calibration file"
@@ -144,8 +158,48 @@ def _read_text(path: str | Path) -> str:
     return text.removeprefix("\ufeff")
 
 
+def _read_bytes(path: str | Path) -> bytes:
+    """The first :data:`MAX_FILE_BYTES` + 1 bytes of the file ``path`` (a local path or a URL).
+
+    A local file must be a regular file: a FIFO, a device or a socket (which a sidecar may
+    name) is refused unread, before it is opened and again after (it is opened without
+    blocking, so a FIFO without a writer cannot hang the batch), so nothing but a file's
+    bytes is ever read.
+    """
+    local = location(str(path))
+    if not isinstance(local, Path):
+        try:
+            with open_input(local) as file:
+                return file.read(MAX_FILE_BYTES + 1)
+        except OSError as error:
+            raise CalibrationError(path, None, f"cannot read ({error.strerror or error})") from None
+    try:
+        _check_regular(path, os.stat(local).st_mode)
+        descriptor = os.open(local, os.O_RDONLY | os.O_NONBLOCK | os.O_NOCTTY | os.O_CLOEXEC)
+    except OSError as error:
+        raise CalibrationError(path, None, f"cannot read ({error.strerror or error})") from None
+    with open(descriptor, "rb", closefd=True) as file:
+        _check_regular(path, os.fstat(file.fileno()).st_mode)
+        try:
+            return file.read(MAX_FILE_BYTES + 1)
+        except OSError as error:
+            raise CalibrationError(path, None, f"cannot read ({error.strerror or error})") from None
+
+
+def _check_regular(path: str | Path, mode: int) -> None:
+    """Refuse a file that is not a regular file (``mode``: its ``st_mode``), naming its kind."""
+    if stat.S_ISREG(mode):
+        return
+    if stat.S_ISDIR(mode):
+        raise CalibrationError(path, None, "is a directory, not a calibration file")
+    kinds = ((stat.S_ISFIFO, "a FIFO"), (stat.S_ISCHR, "a character device"),
+             (stat.S_ISBLK, "a block device"), (stat.S_ISSOCK, "a socket"))
+    kind = next((name for test, name in kinds if test(mode)), "a special file")
+    raise CalibrationError(path, None, f"is {kind}, not a regular file")
+
+
 def _check_nesting(path: str | Path, text: str) -> None:
-    """Refuse text nested deeper than OpenCV's recursive parsers should see.
+    """Refuse text nested deeper than a calibration file is (the readers below recurse).
 
     Counts every bracket and every XML element, inside strings and comments too: an
     over-estimate, which only refuses files no calibration tool writes.
@@ -169,63 +223,149 @@ def _check_nesting(path: str | Path, text: str) -> None:
         raise CalibrationError(path, None, f"nested deeper than {MAX_NESTING} levels")
 
 
-def _cv_reason(error: BaseException) -> str:
-    """OpenCV's parse error as ``line N: problem`` (in-memory storages have no file name)."""
-    cause = error.__cause__ if isinstance(error, SystemError) else error
-    if isinstance(cause, cv2.error):
-        where = _CV_WHERE.match(str(getattr(cause, "func", "")).strip())
-        if where:
-            return f"line {where.group(1)}: {one_line(where.group(2), 160)}"
-        return one_line(str(getattr(cause, "err", "")) or str(cause).strip(), 160)
-    return one_line(str(error), 160)
+def _invalid(path: str | Path, line: int | None, problem: str) -> CalibrationError:
+    """``not a valid OpenCV FileStorage file (line N: problem)``, every quoted part of the
+    parser's ``problem`` (the file's content) cut to a short token."""
+    problem = _QUOTED.sub(lambda match: token(match.group(0)[1:-1]), one_line(problem, 200))
+    where = f"line {line}: " if line is not None else ""
+    return CalibrationError(path, None, f"not a valid OpenCV FileStorage file ({where}{problem})")
 
 
 def _read_opencv(path: str | Path, text: str) -> dict[str, Any]:
-    """The raw fields of an OpenCV FileStorage file (YAML, XML or JSON)."""
+    """The raw fields of an OpenCV FileStorage file (YAML, XML or JSON).
+
+    Read in Python, never by OpenCV's own parser: that parser trusts the file (negative
+    ``sizes`` or a ``dt`` of the wrong kind crash the process), so every node is read here and
+    checked before a value is used.
+    """
     _check_nesting(path, text)
-    try:
-        storage = cv2.FileStorage(text, cv2.FILE_STORAGE_READ | cv2.FILE_STORAGE_MEMORY)
-    except (cv2.error, SystemError) as error:
-        raise CalibrationError(
-            path, None, f"not a valid OpenCV FileStorage file ({_cv_reason(error)})"
-        ) from None
-    try:
-        root = storage.root()
-        if not root.isMap():
-            raise CalibrationError(path, None, "expected a mapping of keys at the top level")
-        keys = list(root.keys())
-        for key in keys:
-            if keys.count(key) > 1:
-                raise CalibrationError(path, key, "given twice")
-        matrix_key = _one_of(path, keys, _CAMERA_MATRIX_KEYS, required=True)
-        matrix = _opencv_matrix(path, matrix_key, root.getNode(matrix_key), (3, 3))
-        distortion_key = _one_of(path, keys, _DISTORTION_KEYS)
-        distortion = None
-        if distortion_key is not None:
-            distortion = _opencv_matrix(
-                path, distortion_key, root.getNode(distortion_key), None
-            )
-        model = None
-        if _MODEL_KEY in keys:
-            model = _opencv_string(path, _MODEL_KEY, root.getNode(_MODEL_KEY))
-        width_key = _one_of(path, keys, _WIDTH_KEYS)
-        height_key = _one_of(path, keys, _HEIGHT_KEYS)
-        width = height = None
-        size_keys = (width_key or "image_width", height_key or "image_height")
-        if width_key is not None:
-            width = _opencv_number(path, width_key, root.getNode(width_key))
-        if height_key is not None:
-            height = _opencv_number(path, height_key, root.getNode(height_key))
-        if width is None and height is None and _RESOLUTION_KEY in keys:
-            width, height = _opencv_size(path, _RESOLUTION_KEY, root.getNode(_RESOLUTION_KEY))
-            size_keys = (_RESOLUTION_KEY, _RESOLUTION_KEY)
-    finally:
-        storage.release()
+    start = text.lstrip()[:1]
+    if start == "<":
+        root = _opencv_xml(path, text)
+    elif start == "{":
+        root = _opencv_json(path, text)
+    else:
+        root = _opencv_yaml(path, text)
+    if not isinstance(root, dict):
+        raise CalibrationError(path, None, "expected a mapping of keys at the top level")
+    keys = [key for key in root if isinstance(key, str)]
+    matrix_key = _one_of(path, keys, _CAMERA_MATRIX_KEYS, required=True)
+    matrix = _opencv_matrix(path, matrix_key, root[matrix_key], (3, 3))
+    distortion_key = _one_of(path, keys, _DISTORTION_KEYS)
+    distortion = None
+    if distortion_key is not None:
+        distortion = _opencv_matrix(path, distortion_key, root[distortion_key], None)
+    model = None
+    if _MODEL_KEY in keys:
+        model = root[_MODEL_KEY]
+        if not isinstance(model, str):
+            raise CalibrationError(path, _MODEL_KEY, f"expected a string, got {_kind(model)}")
+    width_key = _one_of(path, keys, _WIDTH_KEYS)
+    height_key = _one_of(path, keys, _HEIGHT_KEYS)
+    width = height = None
+    size_keys = (width_key or "image_width", height_key or "image_height")
+    if width_key is not None:
+        width = _number(path, width_key, root[width_key])
+    if height_key is not None:
+        height = _number(path, height_key, root[height_key])
+    if width is None and height is None and _RESOLUTION_KEY in keys:
+        width, height = _opencv_size(path, _RESOLUTION_KEY, root[_RESOLUTION_KEY])
+        size_keys = (_RESOLUTION_KEY, _RESOLUTION_KEY)
     return {
         "matrix": matrix, "matrix_key": matrix_key,
         "distortion": distortion, "distortion_key": distortion_key or _DISTORTION_KEYS[0],
         "model": model, "width": width, "height": height, "size_keys": size_keys,
     }
+
+
+def _opencv_yaml(path: str | Path, text: str) -> Any:
+    """FileStorage YAML as Python values, by the bounded loader (:mod:`.safe_yaml`)."""
+    text = _YAML_HEADER.sub("", text, count=1)  # "%YAML:1.0" is no YAML directive
+    try:
+        return load_yaml(text, opencv=True)
+    except YamlInputError as error:
+        if error.key is not None:
+            again = f", again on line {error.line}" if error.line is not None else ""
+            reason = error.problem.removeprefix(f"key {quote(error.key)} ")
+            raise CalibrationError(path, error.key, f"{reason}{again}") from None
+        raise _invalid(path, error.line, error.problem) from None
+
+
+def _opencv_json(path: str | Path, text: str) -> Any:
+    """FileStorage JSON as Python values; a key given twice is an error naming it."""
+    def mapping(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
+        result: dict[str, Any] = {}
+        for key, value in pairs:
+            if key in result:
+                raise CalibrationError(path, key, "given twice")
+            result[key] = value
+        return result
+
+    try:
+        return json.loads(text, object_pairs_hook=mapping, parse_int=_integer)
+    except CalibrationError:
+        raise
+    except json.JSONDecodeError as error:
+        raise _invalid(path, error.lineno, error.msg) from None
+    except (ValueError, RecursionError) as error:
+        raise _invalid(path, None, str(error)) from None
+
+
+def _integer(text: str) -> int | float:
+    """An integer token: as an int, or as a float (infinite, perhaps) when too long for one
+    that a calibration could hold (Python refuses to convert more than 4300 digits)."""
+    return int(text) if len(text) <= 20 else float(text)
+
+
+def _opencv_xml(path: str | Path, text: str) -> Any:
+    """FileStorage XML as Python values: an element with elements is a mapping of their tags
+    (or a list, if all are ``<_>``), one of text its whitespace-separated tokens (a list of
+    several; numbers as numbers, ``"quoted"`` strings without their quotes).
+
+    A DOCTYPE is refused before the parser sees it: OpenCV writes none, and entities could
+    make a small file expand.
+    """
+    if _XML_DECLARATION.search(text):
+        raise CalibrationError(
+            path, None, "has a DOCTYPE or entity declaration (OpenCV's files have none)"
+        )
+    try:
+        root = ElementTree.fromstring(text)
+    except ElementTree.ParseError as error:
+        line = error.position[0] if getattr(error, "position", None) else None
+        raise _invalid(path, line, str(error).split(":", 1)[0]) from None
+    if root.tag != "opencv_storage":
+        raise CalibrationError(path, None, "expected <opencv_storage> at the top level")
+    return _xml_value(path, root, None)
+
+
+def _xml_value(path: str | Path, element: ElementTree.Element, key: str | None) -> Any:
+    children = list(element)
+    if not children:
+        tokens = [_xml_scalar(item) for item in _XML_TOKEN.findall(element.text or "")]
+        return tokens[0] if len(tokens) == 1 else tokens
+    if any((part or "").strip() for part in (element.text, *(child.tail for child in children))):
+        raise CalibrationError(path, key, "holds both text and elements")
+    if all(child.tag == "_" for child in children):
+        return [_xml_value(path, child, key) for child in children]
+    result: dict[str, Any] = {}
+    for child in children:
+        name = child.tag if key is None else f"{key}.{child.tag}"
+        if child.tag in result:
+            raise CalibrationError(path, name, "given twice")
+        result[child.tag] = _xml_value(path, child, name)
+    return result
+
+
+def _xml_scalar(item: str) -> Any:
+    """A token of XML text: a number, or a string (quotes removed)."""
+    if item.startswith('"') and item.endswith('"') and len(item) > 1:
+        return item[1:-1]
+    if _INTEGER.fullmatch(item):
+        return _integer(item)
+    if _REAL.fullmatch(item):
+        return float(item.lower().replace(".nan", "nan").replace(".inf", "inf"))
+    return item
 
 
 def _one_of(
@@ -247,84 +387,95 @@ def _one_of(
 
 
 def _opencv_matrix(
-    path: str | Path, key: str, node: cv2.FileNode, shape: tuple[int, int] | None
+    path: str | Path, key: str, value: object, shape: tuple[int, int] | None
 ) -> np.ndarray:
-    """An ``opencv-matrix`` node (or an ``opencv-nd-matrix`` of 1 or 2 dimensions, as
-    ``FileStorage.write`` stores a 1-D numpy array) as float64, its size checked before
-    OpenCV allocates it. ``shape`` None: a vector (one row or column) of at most 14 values.
+    """An ``opencv-matrix`` (``rows``, ``cols``, ``dt``, ``data``) or an ``opencv-nd-matrix``
+    of 1 or 2 ``sizes`` (as ``FileStorage.write`` stores a 1-D numpy array) as float64, every
+    part checked: whole sizes from 0 up, a ``dt`` of one channel, as many numbers as the sizes
+    say, each a value of that type. ``shape`` None: a vector (one row or column) of at most
+    14 values.
     """
-    if not node.isMap() or node.getNode("data").isNone():
+    if not isinstance(value, dict) or "data" not in value:
         raise CalibrationError(path, key, "expected an opencv-matrix (rows, cols, dt, data)")
-    sizes = node.getNode("sizes")
-    if not sizes.isNone():  # opencv-nd-matrix
-        if not sizes.isSeq() or sizes.size() not in (1, 2):
-            raise CalibrationError(path, key, "expected sizes of 1 or 2 dimensions")
-        dims = [_opencv_number(path, f"{key}.sizes", sizes.at(i)) for i in range(sizes.size())]
-        rows, cols = (1.0, dims[0]) if len(dims) == 1 else dims
-    else:
-        rows = _opencv_number(path, f"{key}.rows", node.getNode("rows"))
-        cols = _opencv_number(path, f"{key}.cols", node.getNode("cols"))
-    if rows is None or cols is None:
-        raise CalibrationError(path, key, "expected an opencv-matrix with rows and cols")
-    data = node.getNode("data")
-    _check_shape(path, key, rows, cols, shape, data.size() if data.isSeq() else 1)
-    try:
-        matrix = node.mat()
-    except (cv2.error, SystemError) as error:
-        raise CalibrationError(path, key, f"not a readable matrix ({_cv_reason(error)})") from None
-    if matrix is None:
-        if rows * cols == 0:
-            return np.zeros((0,), dtype=np.float64)
-        raise CalibrationError(path, key, "not a readable matrix")
-    matrix = np.asarray(matrix, dtype=np.float64)
-    if matrix.ndim == 1 and matrix.size == rows * cols:  # a 1-D opencv-nd-matrix
-        matrix = matrix.reshape(int(rows), int(cols))
-    if matrix.ndim != 2 or matrix.shape != (rows, cols):  # multi-channel data, for one
+    element_type = value.get("dt")
+    if not isinstance(element_type, str) or (
+            element_type.removeprefix("1") not in _ELEMENT_TYPES):
         raise CalibrationError(
-            path, key, f"expected {rows:g}x{cols:g} numbers of one channel, got shape "
-            f"{matrix.shape}"
+            path, f"{key}.dt", f"expected an element type of one channel "
+            f"({', '.join(_ELEMENT_TYPES)}), got {_kind(element_type)}"
         )
-    return matrix if shape is not None else matrix.reshape(-1)
+    if "sizes" in value:  # opencv-nd-matrix
+        sizes = value["sizes"] if isinstance(value["sizes"], list) else [value["sizes"]]
+        if len(sizes) not in (1, 2):
+            raise CalibrationError(path, f"{key}.sizes", f"expected 1 or 2 dimensions, got "
+                                   f"{len(sizes)}")
+        dims = [_dimension(path, f"{key}.sizes", size) for size in sizes]
+        rows, cols = (1, dims[0]) if len(dims) == 1 else dims
+    elif "rows" in value and "cols" in value:
+        rows = _dimension(path, f"{key}.rows", value["rows"])
+        cols = _dimension(path, f"{key}.cols", value["cols"])
+    else:
+        raise CalibrationError(path, key, "expected an opencv-matrix with rows and cols")
+    data = value["data"] if isinstance(value["data"], list) else [value["data"]]
+    _check_shape(path, key, rows, cols, shape, len(data))
+    matrix = np.array([_number(path, f"{key}.data", item) for item in data], dtype=np.float64)
+    kind = np.dtype(_ELEMENT_TYPES[element_type.removeprefix("1")])
+    if kind.kind in "iu":
+        limits = np.iinfo(kind)
+        wrong = ~((matrix == np.round(matrix)) & (matrix >= limits.min) & (matrix <= limits.max))
+        if wrong.any():
+            raise CalibrationError(
+                path, f"{key}.data", f"holds {matrix[wrong][0]:g}, not a value of its dt "
+                f"{token(element_type)} ({kind.name})"
+            )
+    return matrix.reshape(rows, cols) if shape is not None else matrix
 
 
-def _check_shape(path: str | Path, key: str, rows: float, cols: float,
+def _dimension(path: str | Path, key: str, value: object) -> int:
+    """A matrix's ``rows``, ``cols`` or one of its ``sizes``: a whole number, 0 to
+    :data:`MAX_DIMENSION`."""
+    if (isinstance(value, bool) or not isinstance(value, numbers.Real)
+            or not 0 <= value <= MAX_DIMENSION or value != int(value)):
+        raise CalibrationError(
+            path, key, f"expected a whole number from 0 to {MAX_DIMENSION}, got {_kind(value)}"
+        )
+    return int(value)
+
+
+def _check_shape(path: str | Path, key: str, rows: int, cols: int,
                  shape: tuple[int, int] | None, count: int) -> None:
-    """A matrix's declared ``rows x cols``: ``shape`` if given, else one row or column of at
-    most 14 numbers (a distortion vector), holding ``count`` values."""
+    """A matrix's declared ``rows x cols`` (whole numbers from 0, as :func:`_dimension` gives
+    them): ``shape`` if given, else one row or column of at most 14 numbers (a distortion
+    vector), holding ``count`` values."""
     if shape is not None and (rows, cols) != shape:
         raise CalibrationError(
-            path, key, f"expected {shape[0]}x{shape[1]} numbers, got {rows:g}x{cols:g}"
+            path, key, f"expected {shape[0]}x{shape[1]} numbers, got {rows}x{cols}"
         )
     if shape is None and not (min(rows, cols) <= 1 and max(rows, cols) <= 14):
         raise CalibrationError(
-            path, key, f"expected one row or column of at most 14 numbers, got {rows:g}x{cols:g}"
+            path, key, f"expected one row or column of at most 14 numbers, got {rows}x{cols}"
         )
     if count != rows * cols:
         raise CalibrationError(
-            path, key, f"its data holds {count} values, not rows x cols = {rows * cols:g}"
+            path, key, f"its data holds {count} values, not rows x cols = {rows * cols}"
         )
 
 
-def _opencv_number(path: str | Path, key: str, node: cv2.FileNode) -> float | None:
-    if node.isNone():
-        return None
-    if not (node.isInt() or node.isReal()):
-        raise CalibrationError(path, key, "expected a number")
-    return node.real()
+def _number(path: str | Path, key: str, value: object) -> float:
+    """A number of the file as a float (perhaps not finite: the caller checks)."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise CalibrationError(path, key, f"expected a number, got {_kind(value)}")
+    try:
+        return float(value)
+    except OverflowError:
+        raise CalibrationError(path, key, f"expected a finite number, got {_kind(value)}") from None
 
 
-def _opencv_string(path: str | Path, key: str, node: cv2.FileNode) -> str:
-    if not node.isString():
-        raise CalibrationError(path, key, "expected a string")
-    return node.string()
-
-
-def _opencv_size(path: str | Path, key: str, node: cv2.FileNode) -> tuple[float, float]:
+def _opencv_size(path: str | Path, key: str, value: object) -> tuple[float, float]:
     """``cameraResolution``: a cv::Size, written as the sequence ``[width, height]``."""
-    if not node.isSeq() or node.size() != 2:
+    if not isinstance(value, list) or len(value) != 2:
         raise CalibrationError(path, key, "expected [width, height]")
-    values = [_opencv_number(path, key, node.at(index)) for index in range(2)]
-    return values[0], values[1]
+    return _number(path, key, value[0]), _number(path, key, value[1])
 
 
 def _read_ros(path: str | Path, text: str) -> dict[str, Any]:
@@ -332,11 +483,14 @@ def _read_ros(path: str | Path, text: str) -> dict[str, Any]:
     try:
         document = load_yaml(text)
     except YamlInputError as error:
-        raise CalibrationError(path, None, f"not valid YAML ({error})") from None
+        problem = _QUOTED.sub(lambda match: token(match.group(0)[1:-1]), str(error))
+        raise CalibrationError(path, error.key, f"not valid YAML ({problem})") from None
     if not isinstance(document, dict):
+        got = (f"a string of {len(document)} characters" if isinstance(document, str)
+               else _kind(document))  # a whole file's text is never quoted
         raise CalibrationError(
-            path, None, "expected a mapping (OpenCV FileStorage or ROS camera_info YAML), got "
-            f"{_kind(document)}"
+            path, None, f"expected a mapping (OpenCV FileStorage or ROS camera_info YAML), got "
+            f"{got}"
         )
     if "camera_matrix" not in document:
         raise CalibrationError(path, "camera_matrix", "missing")
@@ -348,7 +502,7 @@ def _read_ros(path: str | Path, text: str) -> dict[str, Any]:
         )
     model = document.get(_MODEL_KEY)
     if model is not None and not isinstance(model, str):
-        raise CalibrationError(path, _MODEL_KEY, f"expected a string, got {quote(model)}")
+        raise CalibrationError(path, _MODEL_KEY, f"expected a string, got {_kind(model)}")
     if distortion is not None and distortion.size and model is None:
         raise CalibrationError(
             path, _MODEL_KEY, "missing: ROS names the model of its distortion_coefficients "
@@ -365,22 +519,18 @@ def _read_ros(path: str | Path, text: str) -> dict[str, Any]:
 
 
 def _kind(value: object) -> str:
+    """What a value of the file is, for a message: its kind, or a short token of it."""
     if value is None:
         return "nothing"
     if isinstance(value, list):
         return "a list"
-    return quote(value)
+    if isinstance(value, dict):
+        return "a mapping"
+    return token(value)
 
 
 def _ros_number(path: str | Path, key: str, value: object) -> float | None:
-    if value is None:
-        return None
-    if isinstance(value, bool) or not isinstance(value, numbers.Real):
-        raise CalibrationError(path, key, f"expected a number, got {quote(value)}")
-    try:
-        return float(value)
-    except OverflowError:
-        raise CalibrationError(path, key, f"expected a finite number, got {quote(value)}") from None
+    return None if value is None else _number(path, key, value)
 
 
 def _ros_matrix(
@@ -390,16 +540,16 @@ def _ros_matrix(
     if not isinstance(value, dict) or not {"rows", "cols", "data"} <= set(value):
         raise CalibrationError(path, key, f"expected a mapping with rows, cols and data, got "
                                f"{_kind(value)}")
-    rows = _ros_number(path, f"{key}.rows", value["rows"])
-    cols = _ros_number(path, f"{key}.cols", value["cols"])
-    if rows is None or cols is None:
+    if value["rows"] is None or value["cols"] is None:
         raise CalibrationError(path, key, "expected numbers for rows and cols")
+    rows = _dimension(path, f"{key}.rows", value["rows"])
+    cols = _dimension(path, f"{key}.cols", value["cols"])
     data = value["data"]
     if not isinstance(data, list):
         raise CalibrationError(path, f"{key}.data", f"expected a list of numbers, got "
                                f"{_kind(data)}")
     _check_shape(path, key, rows, cols, shape, len(data))
-    numbers_ = [_ros_number(path, f"{key}.data", item) for item in data]
+    numbers_ = [_number(path, f"{key}.data", item) for item in data]
     matrix = np.array(numbers_, dtype=np.float64)
     return matrix.reshape(shape) if shape is not None else matrix
 
@@ -459,10 +609,10 @@ def _lens(
 ) -> Lens | None:
     """The :class:`Lens` of a distortion vector in OpenCV's order (None: a pinhole)."""
     if model is not None:
-        try:
-            model = Lens(model).model  # aliases resolved, unknown names refused
-        except ViewError as error:
-            raise CalibrationError(path, _MODEL_KEY, str(error)) from None
+        model = LENS_ALIASES.get(model, model)
+        if model not in LENS_MODELS:
+            raise CalibrationError(path, _MODEL_KEY, f"unknown lens model {token(model)}; use "
+                                   f"one of {', '.join(LENS_MODELS)}")
     if distortion is None or distortion.size == 0:
         return None
     count = distortion.size
@@ -493,6 +643,8 @@ def _coefficients(intrinsics: Intrinsics) -> np.ndarray:
 
 
 def _opencv_text(intrinsics: Intrinsics, suffix: str) -> str:
+    import cv2  # OpenCV only to write its format
+
     storage = cv2.FileStorage(
         f"camera{suffix}", cv2.FILE_STORAGE_WRITE | cv2.FILE_STORAGE_MEMORY
     )

@@ -13,6 +13,9 @@ from typing import Any
 
 #: Characters of a value quoted in a message, at most.
 QUOTE_LIMIT = 80
+#: Characters quoted of the content of a file the user did not write or name themselves (a
+#: calibration file a sidecar names: ``/etc/passwd``, ``../secret.txt``): a short token.
+TOKEN_LIMIT = 24
 #: Characters of a whole message line, at most.
 LINE_LIMIT = 2000
 
@@ -40,6 +43,12 @@ def quote(value: Any, limit: int = QUOTE_LIMIT) -> str:
     """``value`` as a message quotes it: ``'text'``, escaped, at most ``limit`` characters."""
     text = value if isinstance(value, str) else _bounded_repr(value, limit)
     return "'" + shorten(escape_controls(text), limit) + "'"
+
+
+def token(value: Any) -> str:
+    """``value`` quoted as a short escaped token (:data:`TOKEN_LIMIT` characters at most, then
+    its length): how a message about an untrusted file's content quotes that content."""
+    return quote(value, TOKEN_LIMIT)
 
 
 def _bounded_repr(value: Any, limit: int) -> str:

@@ -19,6 +19,7 @@ short one-line description; values are quoted with :func:`~gsrwt_cli.messages.qu
 
 from __future__ import annotations
 
+import re
 from typing import Any
 
 import yaml
@@ -42,10 +43,11 @@ _MERGE_TAG = "tag:yaml.org,2002:merge"
 
 
 class YamlInputError(ValueError):
-    """YAML text that is invalid or refused; ``line`` is 1-based, or None when unknown."""
+    """YAML text that is invalid or refused; ``line`` is 1-based, or None when unknown;
+    ``key`` the mapping key given twice, when that is the problem."""
 
-    def __init__(self, line: int | None, problem: str) -> None:
-        self.line, self.problem = line, problem
+    def __init__(self, line: int | None, problem: str, key: str | None = None) -> None:
+        self.line, self.problem, self.key = line, problem, key
         super().__init__(f"line {line}: {problem}" if line is not None else problem)
 
 
@@ -91,13 +93,36 @@ class _BoundedLoader(yaml.SafeLoader):
 _BoundedLoader.add_constructor("tag:yaml.org,2002:int", _BoundedLoader.construct_yaml_int)
 
 
-def load_yaml(text: str) -> Any:
-    """The one YAML document in ``text``, as ``yaml.safe_load`` builds it, or None if empty.
+class _OpenCVLoader(_BoundedLoader):
+    """:class:`_BoundedLoader` for OpenCV's FileStorage YAML: nodes of its own tags
+    (``!!opencv-matrix``, ``!!opencv-nd-matrix``, ...) read as plain YAML, and numbers as
+    OpenCV reads them (``1e-05`` and ``.Nan`` are floats, which YAML 1.1 takes for strings)."""
+
+    def construct_opencv_node(self, tag_suffix: str, node: Node) -> Any:
+        if isinstance(node, MappingNode):
+            return self.construct_yaml_map(node)
+        if isinstance(node, SequenceNode):
+            return self.construct_yaml_seq(node)
+        return self.construct_scalar(node)
+
+
+_OpenCVLoader.add_multi_constructor("tag:yaml.org,2002:opencv-",
+                                    _OpenCVLoader.construct_opencv_node)
+_OpenCVLoader.add_implicit_resolver(
+    "tag:yaml.org,2002:float",
+    re.compile(r"^(?:[-+]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)[eE][-+]?[0-9]+|[-+]?\.(?:Nan|Inf))$"),
+    list("-+0123456789."),
+)
+
+
+def load_yaml(text: str, *, opencv: bool = False) -> Any:
+    """The one YAML document in ``text``, as ``yaml.safe_load`` builds it, or None if empty;
+    ``opencv``: as OpenCV's FileStorage YAML (:class:`_OpenCVLoader`; no ``%YAML:1.0`` line).
 
     Raises :class:`YamlInputError` for invalid YAML and for what the module docstring lists.
     """
     try:
-        return _compose_check_construct(text)
+        return _compose_check_construct(text, _OpenCVLoader if opencv else _BoundedLoader)
     except yaml.MarkedYAMLError as error:
         mark = error.problem_mark or error.context_mark
         problem = error.problem or error.context or "invalid YAML"
@@ -118,8 +143,8 @@ def load_yaml(text: str) -> Any:
         raise YamlInputError(None, "nested too deeply") from None
 
 
-def _compose_check_construct(text: str) -> Any:
-    loader = _BoundedLoader(text)  # the reader checks the characters here
+def _compose_check_construct(text: str, loader_class: type[_BoundedLoader]) -> Any:
+    loader = loader_class(text)  # the reader checks the characters here
     try:
         node = loader.get_single_node()
         if node is None:
@@ -197,6 +222,7 @@ def _check_unique_keys(node: MappingNode) -> None:
         identity = (key.tag, key.value)
         if identity in seen:
             raise YamlInputError(
-                _line(key), f"key {quote(key.value)} given twice (first on line {seen[identity]})"
+                _line(key), f"key {quote(key.value)} given twice (first on line {seen[identity]})",
+                key.value,
             )
         seen[identity] = _line(key)

@@ -366,7 +366,7 @@ def test_the_message_reads_as_the_file_the_key_and_the_reason(tmp_path, monkeypa
             for i in range(8)), "aliases expand the document"),
         (b"%YAML:1.0\ncamera_matrix: !!opencv-matrix\n  rows: [1, 2\n", "line \\d+: "),
         (b'<?xml version="1.0"?>\n<opencv_storage>\n<a>3</a>\n<b>\n</opencv_storage>\n',
-         "not a valid OpenCV FileStorage file \\(line 5: Mismatched closing tag\\)"),
+         "not a valid OpenCV FileStorage file \\(line 5: mismatched tag\\)"),
         (b"%YAML:1.0\na: " + b"[" * 100_000 + b"]" * 100_000 + b"\n", "nested deeper than 64"),
         (b'<?xml version="1.0"?>\n<opencv_storage>' + b"<a>" * 100_000 + b"</a>" * 100_000
          + b"</opencv_storage>\n", "nested deeper than 64"),

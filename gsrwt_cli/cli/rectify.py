@@ -521,12 +521,13 @@ def rectify(
     estimating = EstimateOptions(min_confidence, wall, input_pixel_limit) if auto else None
     job_list = plan_jobs(sources, outdir, loaded, view_defaults(view_kwargs), extension,
                          estimating)
-    for camera in sorted({str(job.values["camera"]) for job in job_list
-                          if job.values and job.values.get("camera")}):
-        try:  # a bad calibration file is a usage error, found before any image is read
-            load_camera_file(camera)
+    if view_kwargs.get("camera"):
+        try:  # a bad --camera file is a usage error, found before any image is read
+            load_camera_file(str(view_kwargs["camera"]))
         except CalibrationError as error:
             raise InputError(str(error)) from None
+    # A sidecar's camera files are read by the workers, each file once per worker: a file
+    # that cannot be used is an error row of each image that names it (never the batch's).
     refuse_unsafe_outputs(
         inputs, sources, [job.output for job in job_list], outdir, recursive,
         None if table_path == "-" else location(table_path), sidecar,
