@@ -292,7 +292,8 @@ def process_job(job: Job, settings: Settings, scratch: Scratch | None = None) ->
     """
     scratch = scratch or Scratch()
     row: dict[str, Any] = {"image": str(job.source), "output": str(job.output)}
-    checking = job.existed and not settings.overwrite
+    checking = job.existed and not settings.overwrite and (  # gone since: made afresh
+        os.path.lexists(job.output) if isinstance(job.output, Path) else job.output.exists())
     try:
         with np.errstate(all="ignore"), warnings.catch_warnings(), fetched(job.source):
             warnings.simplefilter("ignore")
