@@ -41,6 +41,7 @@ from .parameters import Found, NotFound, Problem, resolve_parameters
 from .records import RecordError, view_from_values
 from .rectify import RectifyInfo, plan_image
 from .report import PARAMS_COLUMNS, params_row
+from .reruns import differences, is_regular_file, made_with, record_of
 from .sidecar import Sidecar
 from .sources import Source
 from .storage import Location, fetched, is_url, open_input
@@ -55,6 +56,7 @@ RECTIFY_COLUMNS = (
     "out_height",
     "scale",
     "homography",
+    "made_with",
     "status",
     "error",
 )
@@ -78,6 +80,9 @@ class Job:
     #: sidecar, yaml, options, or estimated (from the image: ``rectify --auto``)
     pose_source: str | None = None
     estimate: Any = None  # the EstimateOptions of an estimated pose
+    #: The previous table's row of an existing output, checked (:func:`~gsrwt_cli.reruns.
+    #: record_of`): what made the file that is there.
+    record: dict[str, Any] | None = None
 
 
 #: A function that words an error for the user, or returns None for the error's own text.
@@ -254,6 +259,18 @@ def _geometry(info: RectifyInfo) -> dict[str, Any]:
     }
 
 
+def _made_with(job: Job, settings: Settings) -> str | None:
+    """The ``made_with`` cell of the job's output (:func:`~gsrwt_cli.reruns.made_with`)."""
+    wall = job.estimate.wall if job.estimate is not None else None
+    return made_with(job.values, wall, settings, job.output.suffix)
+
+
+#: The error of an existing output that no record vouches for and these options do not make.
+NOT_MADE_SO = ("its output exists, not made with these options (no valid row of the previous "
+               "table records it); use --overwrite to redo it")
+NOT_A_FILE = "its output exists and is not a regular file; remove it or use another -o"
+
+
 def _plan(view: View, width: int, height: int, settings: Settings) -> RectifyInfo:
     return plan_image(
         view, width, height, bbox=settings.bbox, scale=settings.scale,
@@ -268,18 +285,26 @@ def process_job(job: Job, settings: Settings, scratch: Scratch | None = None) ->
     ``scratch``: the worker's reusable memory (a fresh one if not given). Whatever goes
     wrong, from a bad parameter to an overflow deep in the geometry, becomes the row's
     ``error``; a result that is not finite is an error, never ``ok``.
+
+    An output that existed when the run began (without ``overwrite``; one with a valid
+    record of it never comes here) is made again in memory and compared with the file:
+    ``skipped`` if it is the very file these options make, else an error; never rewritten.
     """
     scratch = scratch or Scratch()
     row: dict[str, Any] = {"image": str(job.source), "output": str(job.output)}
+    checking = job.existed and not settings.overwrite and (  # gone since: made afresh
+        os.path.lexists(job.output) if isinstance(job.output, Path) else job.output.exists())
     try:
         with np.errstate(all="ignore"), warnings.catch_warnings(), fetched(job.source):
             warnings.simplefilter("ignore")
             view, source, pose = _view(job)
             row.update(params_row(view, str(job.source)), focal_source=source, **pose)
-            if job.output.exists() and not settings.overwrite:
+            if checking and not is_regular_file(job.output):
+                raise _JobError(NOT_A_FILE)
+            if not checking and job.output.exists() and not settings.overwrite:
                 # Written since the run began: by this run's own earlier try of the job
                 # (a worker that died after writing it, its task run again), so done.
-                return record_row(job, settings, "skipped" if job.existed else "ok")
+                return record_row(job, settings, "ok")
             if not job.source.is_file():
                 raise _JobError("no such file" if not job.source.exists() else "not a file")
             width, height = measure_image_file(job.source, settings.max_input_pixels)
@@ -291,25 +316,32 @@ def process_job(job: Job, settings: Settings, scratch: Scratch | None = None) ->
                 job.output.suffix, dtype,
                 4 if settings.alpha and channels in (1, 3) else channels, info.size,
             )
-            if not settings.dry_run:
+            if checking or not settings.dry_run:
                 warped = scratch.warp(
                     info.pixel_map, settings.interpolation, settings.fill, settings.alpha,
                     settings.antialias,
                 )
                 encoded = scratch.encode(warped, job.output.suffix, settings.quality)
                 del warped
-                write_atomic(job.output, encoded, root=settings.root)
-        row.update(_geometry(info), image=str(job.source), status="ok")
+                if checking:
+                    with open_input(job.output) as handle:
+                        if handle.read(len(encoded) + 1) != encoded:
+                            raise _JobError(NOT_MADE_SO)
+                else:
+                    write_atomic(job.output, encoded, root=settings.root)
+        row.update(_geometry(info), image=str(job.source), made_with=_made_with(job, settings),
+                   status="skipped" if checking else "ok")
     except Exception as error:  # every failure of one image is that image's row
         row.update(status="error", error=_error_text(error, settings.describe))
     return row
 
 
-def record_row(job: Job, settings: Settings, status: str = "skipped") -> dict[str, Any]:
-    """The full row of an image whose output exists, without decoding anything.
+def record_row(job: Job, settings: Settings, status: str = "ok") -> dict[str, Any]:
+    """The full row of an image whose output this run wrote (its worker died or the run
+    was stopped before the row came back), without decoding anything.
 
     The geometry comes from the input's header size and these settings; if the existing
-    output's size disagrees with it, ``error`` says so (it was made with other options).
+    output's size disagrees with it, ``error`` says so.
     """
     row: dict[str, Any] = {"image": str(job.source), "output": str(job.output)}
     try:
@@ -318,7 +350,8 @@ def record_row(job: Job, settings: Settings, status: str = "skipped") -> dict[st
             row.update(params_row(view, str(job.source)), focal_source=source, **pose)
             size = measure_image_file(job.source, settings.max_input_pixels)
             info = _plan(view, size[0], size[1], settings)
-        row.update(_geometry(info), image=str(job.source), status=status)
+        row.update(_geometry(info), image=str(job.source), status=status,
+                   made_with=_made_with(job, settings))
         existing = image_file_size(job.output)
         if existing is not None and existing != info.size:
             row["error"] = (
@@ -355,11 +388,11 @@ def dead_worker_row(job: Job, reason: str, settings: Settings) -> dict[str, Any]
 
 
 def interrupted_row(job: Job, settings: Settings) -> dict[str, Any]:
-    """The row of an image the run did not finish: its record if its output exists."""
+    """The row of an image the run did not finish: ``ok`` if it wrote its output whole
+    before it stopped, else ``interrupted`` (an output that existed is not described: the
+    next run checks it again)."""
     if _written_before_it_stopped(job, settings):
         return record_row(job, settings, status="ok")
-    if job.output.exists():
-        return record_row(job, settings)
     row = died_row(job, "not done: the run was interrupted")
     row["status"] = "interrupted"
     return row
@@ -484,10 +517,12 @@ def run_batch(
 
     Images are rectified by ``executor`` (default: ``processes`` worker processes of a
     :class:`~gsrwt_cli.executor.ProcessExecutor`, where a worker that dies costs only its
-    image, started as ``context`` says). Images whose output exists
-    (without ``overwrite``) and jobs known to fail are rowed here, without a worker; their
-    row comes from ``previous`` (the last table's rows by ``(image, output)``) when it has
-    one, else from :func:`record_row`. If the run is stopped (an exception such as
+    image, started as ``context`` says). Jobs known to fail, and images whose output exists
+    (without ``overwrite``) with a valid record in ``previous`` (the last table's rows by
+    ``(image, output)``, :func:`~gsrwt_cli.reruns.record_of`), are rowed here, without a
+    worker: the record, ``skipped`` if it was made with what this run asks for, else an
+    error naming the differences. Other existing outputs are checked by a worker
+    (:func:`process_job`). If the run is stopped (an exception such as
     ``KeyboardInterrupt``), the workers are stopped, every job not done gets its row
     (:func:`interrupted_row`), and the exception goes on.
     """
@@ -495,13 +530,20 @@ def run_batch(
     rows: dict[int, dict[str, Any]] = {}
     state = {"next": 0}
 
+    if not settings.overwrite:
+        jobs = [replace(job, record=record_of(
+                    (previous or {}).get((str(job.source), str(job.output))), job.output,
+                    RECTIFY_COLUMNS)) if job.existed else job for job in jobs]
+
     def parent_row(job: Job) -> dict[str, Any]:
-        if job.error is None and job.existed and not settings.overwrite:
-            earlier = (previous or {}).get((str(job.source), str(job.output)))
-            if earlier is not None and earlier.get("status") in ("ok", "skipped"):
-                return {**earlier, "status": "skipped"}
-            return record_row(job, settings)
-        return process_job(job, settings)
+        if job.record is None:
+            return process_job(job, settings)
+        change = differences(job.record["made_with"], _made_with(job, settings) or "")
+        if change is None:
+            return {**job.record, "status": "skipped", "error": None}
+        error = f"its output exists from a run with other options ({change}); use " \
+                "--overwrite to redo it"
+        return {**job.record, "status": "error", "error": one_line(error, 500)}
 
     def emit_ready(fill: Callable[[Job], dict[str, Any]] | None = None) -> None:
         while state["next"] < len(jobs):
@@ -518,7 +560,7 @@ def run_batch(
             state["next"] += 1
 
     def is_parent_job(job: Job) -> bool:
-        return job.error is not None or (job.existed and not settings.overwrite)
+        return job.error is not None or job.record is not None
 
     parent_jobs = {index for index, job in enumerate(jobs) if is_parent_job(job)}
     worker_jobs = [index for index in range(len(jobs)) if index not in parent_jobs]

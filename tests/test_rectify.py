@@ -311,11 +311,14 @@ def test_rerun_skips_and_overwrite_replaces(tmp_path):
     output.write_bytes(b"stale")  # an earlier, different result
     (tmp_path / "out" / "b.png").unlink()  # as if interrupted before b
     again = rectify(*args)
-    assert again.exit_code == 0
-    assert "1 ok, 1 skipped, 0 failed" in again.stderr
+    assert again.exit_code == 1  # a file that is not its record's is never called done
+    assert "1 ok, 0 skipped, 1 failed" in again.stderr
     table = read_table(tmp_path / "out" / "gsrwt.csv")
-    assert table["a.png"]["status"] == "skipped" and table["b.png"]["status"] == "ok"
+    assert table["a.png"]["status"] == "error" and table["b.png"]["status"] == "ok"
+    assert "not made with these options" in table["a.png"]["error"]
     assert output.read_bytes() == b"stale"
+    resumed = rectify(*args)  # b's record holds: skipped
+    assert resumed.exit_code == 1 and "0 ok, 1 skipped, 1 failed" in resumed.stderr
     forced = rectify(*args, "--overwrite")
     assert forced.exit_code == 0 and "2 ok, 0 skipped" in forced.stderr
     table = read_table(tmp_path / "out" / "gsrwt.csv")

@@ -466,8 +466,9 @@ def rectify(
     INPUT is an image, a directory of images, or - to read paths from standard input.
     Parameters per image come from the first of: a row of --sidecar, a NAME.yaml beside
     the image, the --pan/--tilt/--focal options; with --auto, the pose of the rest is
-    estimated from the image. Existing outputs are skipped (rerun to
-    resume); every output is written whole or not at all. Exit code 1 if any image failed.
+    estimated from the image. Existing outputs made with the same options are skipped
+    (rerun to resume), those made otherwise are errors (use --overwrite); every output is
+    written whole or not at all. Exit code 1 if any image failed.
 
     \b
     Examples:
@@ -503,9 +504,10 @@ def rectify(
         except ValueError as error:
             raise click.BadParameter(str(error), param_hint="'--shard'") from None
     table_format = "csv"
+    name = shard_table_name("gsrwt.csv", *shard_k_n) if shard_k_n else "gsrwt.csv"
+    default_table = str(outdir / name)  # the record of the outputs in OUTDIR
     if table_path is None:
-        name = shard_table_name("gsrwt.csv", *shard_k_n) if shard_k_n else "gsrwt.csv"
-        table_path = str(outdir / name)
+        table_path = default_table
     elif table_path != "-":
         table_format = format_from_extension(table_path) or ""
         if table_format not in ("csv", "tsv", "json", "jsonl"):
@@ -544,7 +546,9 @@ def rectify(
     for directory in sorted({job.output.parent for job in job_list} | {outdir}, key=str):
         if not isinstance(directory, Location):  # object stores have no temporaries
             remove_stale_temporaries(directory, names=names)
-    previous = previous_rows(table_path, table_format) if table_path != "-" else {}
+    # What made the outputs that exist: the table this run replaces (to stdout: OUTDIR's).
+    previous = (previous_rows(table_path, table_format) if table_path != "-"
+                else previous_rows(default_table, "csv"))
 
     settings = Settings(
         bbox=box, scale=scale or 1.0, px_per_unit=px_per_unit, max_stretch=max_stretch,
