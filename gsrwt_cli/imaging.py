@@ -42,7 +42,8 @@ INTERPOLATIONS = {
 _WRITABLE: dict[str, tuple[frozenset[str], frozenset[int]]] = {
     ".jpg": (frozenset({"uint8"}), frozenset({1, 3})),
     ".png": (frozenset({"uint8", "uint16"}), frozenset({1, 3, 4})),
-    ".tif": (frozenset({"uint8", "uint16", "float32"}), frozenset({1, 3, 4})),
+    ".tif": (frozenset({"uint8", "uint16", "int16", "float32", "float64"}),
+             frozenset({1, 3, 4})),
     ".bmp": (frozenset({"uint8"}), frozenset({1, 3})),
     ".webp": (frozenset({"uint8"}), frozenset({3, 4})),
 }
@@ -375,12 +376,28 @@ def to_working(image: np.ndarray, alpha: bool = False, out: np.ndarray | None = 
     padding (into ``out`` if given), anything else is warped as it is.
     """
     channels = 1 if image.ndim == 2 else image.shape[2]
+    converts = image.dtype in _CONVERTIBLE
     if alpha and channels in (1, 3):
+        if not converts:
+            return Working(_with_opaque_alpha(image, out))
         code = cv2.COLOR_GRAY2BGRA if channels == 1 else cv2.COLOR_BGR2BGRA
         return Working(cv2.cvtColor(image, code, dst=out))
-    if channels == 3:
+    if channels == 3 and converts:
         return Working(cv2.cvtColor(image, cv2.COLOR_BGR2BGRA, dst=out), padded=True)
     return Working(image)
+
+
+#: Sample types OpenCV's colour conversions take; others are converted by numpy.
+_CONVERTIBLE = (np.dtype(np.uint8), np.dtype(np.uint16), np.dtype(np.float32))
+
+
+def _with_opaque_alpha(image: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+    """A grey or BGR image of any sample type as BGRA with an opaque alpha channel."""
+    if out is None:
+        out = np.empty((*image.shape[:2], 4), image.dtype)
+    out[..., :3] = image[..., None] if image.ndim == 2 else image
+    out[..., 3] = _full_value(image.dtype)
+    return out
 
 
 def warp_working(
@@ -411,7 +428,7 @@ def warp_working(
 
 def from_working(warped: Working) -> np.ndarray:
     """The image in its own layout again (BGRA padding dropped)."""
-    if warped.padded:
+    if warped.padded:  # only sample types OpenCV converts are padded
         return cv2.cvtColor(warped.pixels, cv2.COLOR_BGRA2BGR)
     return warped.pixels
 
