@@ -466,7 +466,7 @@ class Scratch:
         self._regions: list[np.ndarray] = [np.empty(0, np.uint8), np.empty(0, np.uint8)]
         self._decoded: np.ndarray | None = None
         self._padded = False  # the decoded image is a JPEG's BGRA, fourth channel opaque
-        self._icc = b""  # the ICC profile segments of the JPEG read, for its JPEG output
+        self._icc = b""  # the JPEG's ICC profile segments, if they describe it, for its output
 
     def array(self, region: int, shape: tuple[int, ...], dtype: np.dtype) -> np.ndarray:
         """An uninitialized array of ``shape`` and ``dtype`` in ``region`` (0 or 1)."""
@@ -482,11 +482,13 @@ class Scratch:
 
         The previous image is dropped first, so a failure never leaves its pixels behind.
         """
-        from .jpeg_stream import icc_segments
+        from .jpeg_stream import ICC_COLOUR_SPACES, icc_colour_space, icc_segments, jpeg_components
 
         self._decoded, self._padded = None, False
         data = read_file_bytes(path)
         self._icc = icc_segments(data)
+        if icc_colour_space(self._icc) != ICC_COLOUR_SPACES.get(jpeg_components(data)):
+            self._icc = b""  # a profile that does not describe its own JPEG describes nothing
         size = header_size(data) if data[:3] == b"\xff\xd8\xff" else None
         if size is not None and size[0] * size[1] <= max_pixels:
             into = self.array(1, (size[0] * size[1] * 4,), np.uint8)
@@ -531,11 +533,16 @@ class Scratch:
 
     def encode(self, warped: Working, extension: str, quality: int = 95) -> bytes:
         """:func:`encode_image` of what :meth:`warp` gave; a JPEG made from a JPEG keeps its
-        colour profile (the input's ICC segments, as they were)."""
-        from .jpeg_stream import with_segments
+        colour profile (the input's ICC segments, as they were) where its colour model is
+        kept: the profile's colour space is the input's and the output's (grey in, grey out;
+        RGB in, RGB out). A CMYK JPEG, decoded to BGR, loses its CMYK profile."""
+        from .jpeg_stream import ICC_COLOUR_SPACES, icc_colour_space, with_segments
 
         encoded = encode_image(warped, extension, quality)
-        if canonical_extension(extension) == ".jpg":
+        channels = 3 if warped.padded else 1 if warped.pixels.ndim == 2 else (
+            warped.pixels.shape[2])
+        if (canonical_extension(extension) == ".jpg" and self._icc
+                and icc_colour_space(self._icc) == ICC_COLOUR_SPACES.get(channels)):
             encoded = with_segments(encoded, self._icc)
         return encoded
 
