@@ -186,10 +186,11 @@ class LensDistortion:
         high = np.full(len(pixels), math.atan(self.limit) if math.isfinite(self.limit)
                        else math.pi / 2)
         low = np.zeros(len(pixels))
-        for _ in range(iterations):
-            middle = (low + high) / 2
-            below = _radial_distortion(self.coefficients, self.fisheye, middle) < radius
-            low, high = np.where(below, middle, low), np.where(below, high, middle)
+        with np.errstate(all="ignore"):  # tan near 90 degrees overflows: "not below"
+            for _ in range(iterations):
+                middle = (low + high) / 2
+                below = _radial_distortion(self.coefficients, self.fisheye, middle) < radius
+                low, high = np.where(below, middle, low), np.where(below, high, middle)
         with np.errstate(divide="ignore", invalid="ignore"):
             factor = np.where(radius > 0, np.tan(low) / radius, 1.0)
         return self._pixels(distorted * factor[:, None])
