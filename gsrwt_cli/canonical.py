@@ -3,6 +3,7 @@
 ``gsrwt lines`` and ``gsrwt match`` work on frontal views (thesis Sec. 5.2.2). An image with
 camera parameters (the same sources as ``gsrwt rectify``) is rectified first, and what is
 found there is mapped back to its own pixels; an image with none is taken as already frontal.
+Views are 8-bit whatever the file's sample type (:func:`~gsrwt_cli.landmarks.edges.pixels8`).
 """
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from .imaging import ImageError, read_image
+from .landmarks.edges import pixels8
 from .parameters import NotFound, Problem, resolve_parameters
 from .pixelmap import PixelMap
 from .records import RecordError
@@ -46,7 +48,7 @@ def canonical_views(
     for path in paths:
         found = resolve_parameters(path, PurePosixPath(path.name), sidecar, fallback)
         try:
-            image = read_image(path)
+            image = pixels8(read_image(path))  # what the edges need, before the warp
         except ImageError as error:
             yield path, str(error)
             continue

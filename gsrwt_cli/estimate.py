@@ -517,6 +517,8 @@ def estimate_pose(
         lens = lens_distortion(View(intrinsics=camera, pose=Pose(0.0, 0.0)))
         if lens is not None:
             ideal = np.hstack([lens.undistort(detected[:, :2]), lens.undistort(detected[:, 2:])])
+            reached = np.all(np.isfinite(ideal), axis=1)  # none beyond the lens's fold
+            detected, ideal = detected[reached], ideal[reached]
         return _estimate_known_focal(detected, ideal, camera, inlier_px, segments, False, wall)
     if principal_point is None:
         principal_point = ((width - 1) / 2.0, (height - 1) / 2.0)

@@ -148,8 +148,10 @@ def full_frame(
     grid = np.stack(np.meshgrid(cols, rows), axis=-1).reshape(-1, 2)
     lens = lens_distortion(view)
     if lens is not None:  # the distorted image's pixels, as a pinhole would have seen them
-        grid = lens.undistort(grid)
+        grid = lens.undistort(grid)  # NaN where no ray within the lens's limit reaches
         grid = grid[np.all(np.isfinite(grid), axis=1)]
+        if len(grid) == 0:
+            raise BeyondLensLimitError(lens)
     w = grid @ homography[2, :2] + homography[2, 2]
     visible = grid[w > 1e-12]
     reference = local_stretch(homography, np.array([[view.cx, view.cy]]))[0]
@@ -246,6 +248,41 @@ class NothingWithinStretchError(ValueError):
         )
 
 
+class BeyondLensLimitError(ValueError):
+    """All the output lies beyond the radius where the lens model folds back
+    (:attr:`~gsrwt_cli.pixelmap.LensDistortion.limit`): nothing in it has a source."""
+
+    def __init__(self, lens: LensDistortion) -> None:
+        angle = math.degrees(math.atan(lens.limit))
+        super().__init__(
+            f"the lens model folds back {angle:.1f} degrees off axis ({lens.limit_px:.0f} "
+            "pixels from the principal point: its distortion stops growing there) and all "
+            "of the output lies beyond that"
+        )
+
+
+def sees_within_lens_limit(pixel_map: PixelMap, samples: int = 65) -> bool:
+    """Whether any of the output sees a ray within its lens's limit, in front of the
+    horizon: the optical axis in the frame, or one of ``samples x samples`` output points."""
+    lens = pixel_map.lens
+    if lens is None or math.isinf(lens.limit):
+        return True
+    width, height = pixel_map.size
+    homography = np.asarray(pixel_map.output_from_input, dtype=np.float64)
+    cx, cy = lens.camera_matrix[0][2], lens.camera_matrix[1][2]
+    axis = homography @ np.array([cx, cy, 1.0])
+    if axis[2] > 0 and -0.5 <= axis[0] / axis[2] <= width - 0.5 and (
+            -0.5 <= axis[1] / axis[2] <= height - 0.5):
+        return True
+    cols = np.linspace(-0.5, width - 0.5, samples)
+    rows = np.linspace(-0.5, height - 0.5, samples)
+    outputs = np.stack(np.meshgrid(cols, rows), axis=-1).reshape(-1, 2)
+    input_from_output = np.linalg.inv(homography)
+    w = outputs @ input_from_output[2, :2] + input_from_output[2, 2]
+    ideal = map_points(input_from_output, outputs)
+    return bool(np.any((w > 0) & lens.within(ideal)))
+
+
 @dataclass(frozen=True)
 class Plan:
     """What is done to one image: the view (with its size), the output frame, and the pixel
@@ -318,7 +355,10 @@ def _plan_output(
     if width * height > max_pixels:
         raise OutputTooLargeError(width, height, max_pixels)
     homography = frame.output_from_default() @ output_from_input(view)
-    return Plan(view, frame, PixelMap(homography, (width, height), lens_distortion(view)))
+    pixel_map = PixelMap(homography, (width, height), lens_distortion(view))
+    if not sees_within_lens_limit(pixel_map):
+        raise BeyondLensLimitError(pixel_map.lens)
+    return Plan(view, frame, pixel_map)
 
 
 def lens_distortion(view: View) -> LensDistortion | None:

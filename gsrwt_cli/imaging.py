@@ -42,7 +42,8 @@ INTERPOLATIONS = {
 _WRITABLE: dict[str, tuple[frozenset[str], frozenset[int]]] = {
     ".jpg": (frozenset({"uint8"}), frozenset({1, 3})),
     ".png": (frozenset({"uint8", "uint16"}), frozenset({1, 3, 4})),
-    ".tif": (frozenset({"uint8", "uint16", "float32"}), frozenset({1, 3, 4})),
+    ".tif": (frozenset({"uint8", "uint16", "int16", "float32", "float64"}),
+             frozenset({1, 3, 4})),
     ".bmp": (frozenset({"uint8"}), frozenset({1, 3})),
     ".webp": (frozenset({"uint8"}), frozenset({3, 4})),
 }
@@ -375,12 +376,28 @@ def to_working(image: np.ndarray, alpha: bool = False, out: np.ndarray | None = 
     padding (into ``out`` if given), anything else is warped as it is.
     """
     channels = 1 if image.ndim == 2 else image.shape[2]
+    converts = image.dtype in _CONVERTIBLE
     if alpha and channels in (1, 3):
+        if not converts:
+            return Working(_with_opaque_alpha(image, out))
         code = cv2.COLOR_GRAY2BGRA if channels == 1 else cv2.COLOR_BGR2BGRA
         return Working(cv2.cvtColor(image, code, dst=out))
-    if channels == 3:
+    if channels == 3 and converts:
         return Working(cv2.cvtColor(image, cv2.COLOR_BGR2BGRA, dst=out), padded=True)
     return Working(image)
+
+
+#: Sample types OpenCV's colour conversions take; others are converted by numpy.
+_CONVERTIBLE = (np.dtype(np.uint8), np.dtype(np.uint16), np.dtype(np.float32))
+
+
+def _with_opaque_alpha(image: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+    """A grey or BGR image of any sample type as BGRA with an opaque alpha channel."""
+    if out is None:
+        out = np.empty((*image.shape[:2], 4), image.dtype)
+    out[..., :3] = image[..., None] if image.ndim == 2 else image
+    out[..., 3] = _full_value(image.dtype)
+    return out
 
 
 def warp_working(
@@ -411,7 +428,7 @@ def warp_working(
 
 def from_working(warped: Working) -> np.ndarray:
     """The image in its own layout again (BGRA padding dropped)."""
-    if warped.padded:
+    if warped.padded:  # only sample types OpenCV converts are padded
         return cv2.cvtColor(warped.pixels, cv2.COLOR_BGRA2BGR)
     return warped.pixels
 
@@ -449,7 +466,7 @@ class Scratch:
         self._regions: list[np.ndarray] = [np.empty(0, np.uint8), np.empty(0, np.uint8)]
         self._decoded: np.ndarray | None = None
         self._padded = False  # the decoded image is a JPEG's BGRA, fourth channel opaque
-        self._icc = b""  # the ICC profile segments of the JPEG read, for its JPEG output
+        self._icc = b""  # the JPEG's ICC profile segments, if they describe it, for its output
 
     def array(self, region: int, shape: tuple[int, ...], dtype: np.dtype) -> np.ndarray:
         """An uninitialized array of ``shape`` and ``dtype`` in ``region`` (0 or 1)."""
@@ -465,11 +482,13 @@ class Scratch:
 
         The previous image is dropped first, so a failure never leaves its pixels behind.
         """
-        from .jpeg_stream import icc_segments
+        from .jpeg_stream import ICC_COLOUR_SPACES, icc_colour_space, icc_segments, jpeg_components
 
         self._decoded, self._padded = None, False
         data = read_file_bytes(path)
         self._icc = icc_segments(data)
+        if icc_colour_space(self._icc) != ICC_COLOUR_SPACES.get(jpeg_components(data)):
+            self._icc = b""  # a profile that does not describe its own JPEG describes nothing
         size = header_size(data) if data[:3] == b"\xff\xd8\xff" else None
         if size is not None and size[0] * size[1] <= max_pixels:
             into = self.array(1, (size[0] * size[1] * 4,), np.uint8)
@@ -514,11 +533,16 @@ class Scratch:
 
     def encode(self, warped: Working, extension: str, quality: int = 95) -> bytes:
         """:func:`encode_image` of what :meth:`warp` gave; a JPEG made from a JPEG keeps its
-        colour profile (the input's ICC segments, as they were)."""
-        from .jpeg_stream import with_segments
+        colour profile (the input's ICC segments, as they were) where its colour model is
+        kept: the profile's colour space is the input's and the output's (grey in, grey out;
+        RGB in, RGB out). A CMYK JPEG, decoded to BGR, loses its CMYK profile."""
+        from .jpeg_stream import ICC_COLOUR_SPACES, icc_colour_space, with_segments
 
         encoded = encode_image(warped, extension, quality)
-        if canonical_extension(extension) == ".jpg":
+        channels = 3 if warped.padded else 1 if warped.pixels.ndim == 2 else (
+            warped.pixels.shape[2])
+        if (canonical_extension(extension) == ".jpg" and self._icc
+                and icc_colour_space(self._icc) == ICC_COLOUR_SPACES.get(channels)):
             encoded = with_segments(encoded, self._icc)
         return encoded
 

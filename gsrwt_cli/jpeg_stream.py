@@ -107,6 +107,37 @@ def icc_segments(data: bytes) -> bytes:
                     == _ICC_SIGNATURE)
 
 
+#: The colour space signature of an ICC profile (its header's bytes 16-19, ICC.1 7.2.6) that
+#: describes an image of each number of channels (a JPEG's components, a decoded image's).
+ICC_COLOUR_SPACES = {1: b"GRAY", 3: b"RGB ", 4: b"CMYK"}
+#: Start-of-frame markers: SOF0-3, 5-7, 9-11, 13-15 (C4, C8 and CC are other markers).
+_SOF = frozenset({*range(0xC0, 0xC4), *range(0xC5, 0xC8), *range(0xC9, 0xCC),
+                  *range(0xCD, 0xD0)})
+
+
+def jpeg_components(data: bytes) -> int | None:
+    """How many colour components a JPEG's frame has (1 grey, 3 YCbCr or RGB, 4 CMYK or
+    YCCK), from its first start-of-frame segment; None if there is none before the scan."""
+    for code, start, end in _header_segments(data):
+        if code in _SOF and end >= start + 10:
+            return data[start + 9]
+    return None
+
+
+def icc_colour_space(segments: bytes) -> bytes | None:
+    """The colour space signature (``b"RGB "``, ``b"GRAY"``, ``b"CMYK"``, ...) of the ICC
+    profile in ``segments`` (as :func:`icc_segments` gives them): bytes 16-19 of the chunk
+    numbered 1; None if there is no such chunk or it is too short to say."""
+    position, prefix = 0, 4 + len(_ICC_SIGNATURE)  # marker, length, signature
+    while position + prefix + 2 <= len(segments):
+        end = position + 2 + int.from_bytes(segments[position + 2:position + 4], "big")
+        if segments[position + prefix] == 1:  # the chunk's sequence number
+            space = segments[position + prefix + 2 + 16:position + prefix + 2 + 20]
+            return space if len(space) == 4 and position + prefix + 2 + 20 <= end else None
+        position = end
+    return None
+
+
 def with_segments(jpeg: bytes, segments: bytes) -> bytes:
     """``jpeg`` with marker ``segments`` inserted into its header: after its JFIF APP0
     segment, which must come first, or else right after its start-of-image marker."""

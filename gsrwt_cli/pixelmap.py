@@ -11,6 +11,7 @@ second warp.
 
 from __future__ import annotations
 
+import functools
 import math
 from collections import OrderedDict
 from dataclasses import dataclass
@@ -21,6 +22,62 @@ import numpy as np
 from .geometry import Matrix, largest_singular_value, local_stretch, map_points
 
 _POINT_CRITERIA = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 50, 1e-12)
+#: A pixel's ideal position is taken when the lens puts it back within this many pixels.
+_INVERSE_TOLERANCE_PX = 0.01
+#: OpenCV's inverse of a radial model is bisected again where it is further off than this.
+_RADIAL_TOLERANCE_PX = 1e-6
+#: Where output pixels have no source: far outside any image, sampled as the fill.
+NO_SOURCE = -1e6
+
+
+def monotonic_radius(coefficients: tuple[float, ...], fisheye: bool = False) -> float:
+    """How far from the optical axis a lens model is one-to-one: the normalized radius
+    ``r = tan(angle off axis)`` of ideal rays below which the distorted radius ``r_d(r)``
+    grows with ``r``; ``inf`` if it always does.
+
+    Beyond that radius the model folds back (``r_d`` shrinks again, or passes a pole): its
+    pixels repeat, mirrored, what rays nearer the axis show, and have no ray of their own.
+    ``coefficients``: OpenCV's vector. Plumb-bob and rational models:
+    ``r_d = r N(r^2) / D(r^2)`` with ``N = 1 + k1 s + k2 s^2 + k3 s^3`` and ``D = 1 + k4 s +
+    k5 s^2 + k6 s^3``; ``d r_d / dr`` has the sign of ``(N + 2 s N') D - 2 s N D'``, and the
+    radius is the square root of the smallest positive root of that polynomial or of ``D``
+    (tangential, prism and tilt terms, which are not radial, are left out). Fisheye model:
+    ``r_d = theta (1 + k1 theta^2 + ... + k4 theta^8)`` with ``theta = atan r``; the radius is
+    ``tan`` of the smallest root of ``d r_d / d theta`` below 90 degrees.
+    """
+    from numpy.polynomial import Polynomial
+
+    def smallest_positive_root(*polynomials: Polynomial) -> float:
+        roots = np.concatenate([polynomial.trim().roots() for polynomial in polynomials])
+        real = roots.real[(np.abs(roots.imag) <= 1e-9 * np.maximum(1.0, np.abs(roots.real)))
+                          & (roots.real > 0)]
+        return float(real.min()) if len(real) else math.inf
+
+    d = tuple(coefficients) + (0.0,) * 8
+    if fisheye:
+        k1, k2, k3, k4 = d[:4]
+        slope = Polynomial([1.0, 3 * k1, 5 * k2, 7 * k3, 9 * k4])  # d r_d / d theta, t = theta^2
+        theta = math.sqrt(smallest_positive_root(slope))
+        return math.tan(theta) if theta < math.pi / 2 else math.inf
+    k1, k2, _, _, k3, k4, k5, k6 = d[:8]
+    numerator, denominator = Polynomial([1.0, k1, k2, k3]), Polynomial([1.0, k4, k5, k6])
+    s = Polynomial([0.0, 1.0])
+    slope = ((numerator + 2 * s * numerator.deriv()) * denominator
+             - 2 * s * numerator * denominator.deriv())
+    return math.sqrt(smallest_positive_root(slope, denominator))
+
+
+def _radial_distortion(coefficients: tuple[float, ...], fisheye: bool,
+                       theta: np.ndarray) -> np.ndarray:
+    """``r_d`` of rays ``theta`` radians off the axis (the radial part of the model)."""
+    d = tuple(coefficients) + (0.0,) * 8
+    t = theta * theta
+    if fisheye:
+        k1, k2, k3, k4 = d[:4]
+        return theta * (1 + t * (k1 + t * (k2 + t * (k3 + t * k4))))
+    k1, k2, _, _, k3, k4, k5, k6 = d[:8]
+    s = np.tan(theta) ** 2
+    return np.tan(theta) * (1 + s * (k1 + s * (k2 + s * k3))) / (1 + s * (k4 + s * (k5 + s * k6)))
 
 
 @dataclass(frozen=True)
@@ -35,6 +92,32 @@ class LensDistortion:
     camera_matrix: tuple[tuple[float, float, float], ...]
     coefficients: tuple[float, ...]
     fisheye: bool = False
+
+    @functools.cached_property
+    def limit(self) -> float:
+        """The normalized radius of ideal rays up to which the model is one-to-one
+        (:func:`monotonic_radius`): like the horizon, nothing beyond it is sampled or framed."""
+        return monotonic_radius(self.coefficients, self.fisheye)
+
+    @property
+    def limit_px(self) -> float:
+        """:attr:`limit` in ideal pixels from the principal point (along the larger focal)."""
+        return self.limit * max(self._k[0, 0], self._k[1, 1])
+
+    @property
+    def is_radial(self) -> bool:
+        """Whether the model only moves points along their radius (no tangential, prism or
+        tilt terms): its inverse is then one monotonic function of the radius."""
+        return self.fisheye or not any(v for i, v in enumerate(self.coefficients)
+                                       if i in (2, 3) or i >= 8)
+
+    def within(self, ideal: np.ndarray) -> np.ndarray:
+        """Which ``(N, 2)`` ideal pixels lie within :attr:`limit` (False for NaN)."""
+        if math.isinf(self.limit):
+            return np.all(np.isfinite(ideal), axis=1)
+        normalized = self._normalized(np.asarray(ideal, dtype=np.float64))
+        with np.errstate(invalid="ignore"):
+            return np.hypot(normalized[:, 0], normalized[:, 1]) < self.limit
 
     @property
     def _k(self) -> np.ndarray:
@@ -51,25 +134,66 @@ class LensDistortion:
         return map_points(self._k, normalized)
 
     def distort(self, ideal: np.ndarray) -> np.ndarray:
-        """``(N, 2)`` ideal pixels to the pixels the lens puts them on."""
+        """``(N, 2)`` ideal pixels to the pixels the lens puts them on; NaN beyond
+        :attr:`limit`, where the model folds back and no pixel is the ray's own."""
+        ideal = np.asarray(ideal, dtype=np.float64)
         rays = np.column_stack([self._normalized(ideal), np.ones(len(ideal))])[:, None, :]
         zero = np.zeros(3)
         if self.fisheye:
             distorted, _ = cv2.fisheye.projectPoints(rays, zero, zero, np.eye(3), self._d)
         else:
             distorted, _ = cv2.projectPoints(rays, zero, zero, np.eye(3), self._d)
-        return self._pixels(distorted.reshape(-1, 2))
+        pixels = self._pixels(distorted.reshape(-1, 2))
+        pixels[~self.within(ideal)] = np.nan
+        return pixels
 
     def undistort(self, pixels: np.ndarray) -> np.ndarray:
-        """``(N, 2)`` pixels of the image to ideal pixels (OpenCV's iterative inverse)."""
-        normalized = self._normalized(np.asarray(pixels, dtype=np.float64))[:, None, :]
+        """``(N, 2)`` pixels of the image to ideal pixels within :attr:`limit`; NaN for pixels
+        no such ray reaches (beyond where the model folds back).
+
+        OpenCV's iterative inverse first; an answer is kept when the lens puts it back on the
+        pixel (:data:`_INVERSE_TOLERANCE_PX`). A radial model's answers further off than
+        :data:`_RADIAL_TOLERANCE_PX` (OpenCV's fisheye inverse stops at 90 degrees of
+        distorted angle; its iterations crawl near a fold and can run away on strong
+        lenses) are found again by bisection of the model's monotonic part.
+        """
+        pixels = np.asarray(pixels, dtype=np.float64)
+        normalized = self._normalized(pixels)[:, None, :]
         if self.fisheye:
             ideal = cv2.fisheye.undistortPoints(normalized, np.eye(3), self._d,
                                                 criteria=_POINT_CRITERIA)
         else:
             ideal = cv2.undistortPoints(normalized, np.eye(3), self._d, None, None, None,
                                             _POINT_CRITERIA)
-        return self._pixels(ideal.reshape(-1, 2))
+        ideal = self._pixels(ideal.reshape(-1, 2))
+        if self.is_radial:  # answers OpenCV did not polish (slow near a fold): bisected
+            unsure = ~(self._residual(ideal, pixels) <= _RADIAL_TOLERANCE_PX)
+            if unsure.any():
+                ideal[unsure] = self._radial_inverse(pixels[unsure])
+        ideal[~(self._residual(ideal, pixels) <= _INVERSE_TOLERANCE_PX)] = np.nan
+        return ideal
+
+    def _residual(self, ideal: np.ndarray, pixels: np.ndarray) -> np.ndarray:
+        """How far (pixels) the lens puts ``ideal`` from ``pixels``; NaN beyond the limit."""
+        with np.errstate(invalid="ignore"):
+            return np.hypot(*(self.distort(ideal) - pixels).T)
+
+    def _radial_inverse(self, pixels: np.ndarray, iterations: int = 64) -> np.ndarray:
+        """Ideal pixels of a radial model's ``pixels`` by bisection of the angle off axis
+        over the monotonic part (NaN where the distorted radius is beyond its reach)."""
+        distorted = self._normalized(pixels)
+        radius = np.hypot(distorted[:, 0], distorted[:, 1])
+        high = np.full(len(pixels), math.atan(self.limit) if math.isfinite(self.limit)
+                       else math.pi / 2)
+        low = np.zeros(len(pixels))
+        with np.errstate(all="ignore"):  # tan near 90 degrees overflows: "not below"
+            for _ in range(iterations):
+                middle = (low + high) / 2
+                below = _radial_distortion(self.coefficients, self.fisheye, middle) < radius
+                low, high = np.where(below, middle, low), np.where(below, high, middle)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            factor = np.where(radius > 0, np.tan(low) / radius, 1.0)
+        return self._pixels(distorted * factor[:, None])
 
     def maps(self, output_from_ideal: np.ndarray, size: tuple[int, int],
              step: int | None = None, reuse: tuple[np.ndarray, np.ndarray] | None = None):
@@ -106,14 +230,29 @@ class LensDistortion:
                         @ np.asarray(output_from_ideal, dtype=np.float64) @ k)
             initialize = (cv2.fisheye.initUndistortRectifyMap if self.fisheye
                           else cv2.initUndistortRectifyMap)
-            return initialize(k, self._d, rotation, np.eye(3), grid, cv2.CV_32FC1)
+            maps = initialize(k, self._d, rotation, np.eye(3), grid, cv2.CV_32FC1)
+            if math.isfinite(self.limit):  # beyond the fold: no source, like the horizon
+                beyond = self._beyond_limit(np.linalg.inv(rotation), grid)
+                for part in maps:
+                    part[beyond] = NO_SOURCE
+            return maps
         cols, rows = np.meshgrid(np.arange(grid[0], dtype=np.float64),
                                  np.arange(grid[1], dtype=np.float64))
         outputs = map_points(output_from_grid, np.column_stack([cols.ravel(), rows.ravel()]))
         sources = self.distort(map_points(np.linalg.inv(output_from_ideal), outputs))
-        sources = np.nan_to_num(sources, nan=-1e6, posinf=-1e6, neginf=-1e6)
+        sources = np.nan_to_num(sources, nan=NO_SOURCE, posinf=NO_SOURCE, neginf=NO_SOURCE)
         return (sources[:, 0].reshape(grid[1], grid[0]).astype(np.float32),
                 sources[:, 1].reshape(grid[1], grid[0]).astype(np.float32))
+
+    def _beyond_limit(self, normalized_from_grid: np.ndarray, grid: tuple[int, int]
+                      ) -> np.ndarray:
+        """Which grid points' normalized rays lie beyond :attr:`limit` (shape ``(rows,
+        cols)``); ``normalized_from_grid`` maps grid points to homogeneous normalized rays."""
+        cols = np.arange(grid[0], dtype=np.float64)[None, :]
+        rows = np.arange(grid[1], dtype=np.float64)[:, None]
+        x, y, w = (m[0] * cols + m[1] * rows + m[2] for m in normalized_from_grid)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return ~(np.hypot(x, y) < self.limit * np.abs(w))
 
     @staticmethod
     def expand(grid: tuple[np.ndarray, np.ndarray], size: tuple[int, int], step: int,
@@ -257,7 +396,7 @@ class PixelMap:
         inverse = np.linalg.inv(self.output_from_input)
         sources = map_points(inverse, ideal)
         w = ideal @ inverse[2, :2] + inverse[2, 2]
-        sources[~(w > 0) | ~np.all(np.isfinite(sources), axis=1)] = -1e6
+        sources[~(w > 0) | ~np.all(np.isfinite(sources), axis=1)] = NO_SOURCE
         return (sources[:, 0].reshape(height, width).astype(np.float32),
                 sources[:, 1].reshape(height, width).astype(np.float32))
 

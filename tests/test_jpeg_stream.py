@@ -3,6 +3,7 @@ truncated JPEGs are still refused."""
 
 from __future__ import annotations
 
+import io
 import struct
 from pathlib import Path
 
@@ -134,6 +135,51 @@ def test_rectify_reads_a_motion_photo_and_still_refuses_a_truncated_jpeg(tmp_pat
     np.testing.assert_array_equal(motion, plain)
 
 
+def icc_profile(colour_space: bytes, device_class: bytes, payload: bytes = b"") -> bytes:
+    """A valid ICC profile (ICC.1:2022 section 7.2: its 128-byte header, a tag table of no
+    tags) of ``colour_space`` (``b"CMYK"``, ``b"GRAY"``, ``b"RGB "``) with ``payload`` after
+    it: little Color Management Module (lcms) opens it, as the test checks."""
+    from PIL import ImageCms
+
+    header = bytearray(128)
+    body = struct.pack(">I", 0) + payload
+    struct.pack_into(">I4sI4s4s4s6H", header, 0, 128 + len(body), b"lcms", 0x04300000,
+                     device_class, colour_space, b"Lab ", 2024, 1, 1, 0, 0, 0)
+    header[36:40] = b"acsp"
+    struct.pack_into(">3i", header, 68, round(0.9642 * 65536), 65536, round(0.8249 * 65536))
+    profile = bytes(header) + body
+    opened = ImageCms.ImageCmsProfile(io.BytesIO(profile))
+    assert opened.profile.xcolor_space == colour_space.decode()
+    return profile
+
+
+@pytest.mark.parametrize(("mode", "space", "kept"), [
+    ("CMYK", b"CMYK", False),  # decoded to BGR: a CMYK profile would misdescribe it
+    ("CMYK", b"RGB ", False),  # nor does an RGB one describe OpenCV's naive conversion
+    ("L", b"GRAY", True),
+    ("L", b"RGB ", False),
+    ("RGB", b"GRAY", False),
+    ("RGB", b"CMYK", False),
+    ("RGB", b"RGB ", True),
+])
+def test_a_colour_profile_is_kept_only_where_its_colour_model_is(tmp_path, mode, space, kept):
+    """The output JPEG carries the input's ICC profile only when the profile's colour space
+    (header bytes 16-19) is the output's: grey in, grey out; RGB in, RGB out."""
+    from PIL import Image
+
+    profile = icc_profile(space, b"prtr" if space == b"CMYK" else b"mntr")
+    picture = Image.fromarray(cv2.cvtColor(cv2.imread(str(PHOTO)), cv2.COLOR_BGR2RGB))
+    picture.convert(mode).save(tmp_path / "in.jpg", quality=92, icc_profile=profile)
+    with Image.open(tmp_path / "in.jpg") as written:
+        assert written.mode == mode and written.info["icc_profile"] == profile
+    result = run_gsrwt("rectify", str(tmp_path / "in.jpg"), "--pan", "10", "--tilt", "-5",
+                       "--focal", "537", "-o", str(tmp_path / "out"))
+    assert result.returncode == 0, result.stderr
+    with Image.open(tmp_path / "out" / "in.jpg") as rectified:
+        assert rectified.mode == ("L" if mode == "L" else "RGB")
+        assert rectified.info.get("icc_profile") == (profile if kept else None)
+
+
 @pytest.mark.parametrize("profile_size", ["srgb", 150_000])
 def test_rectify_keeps_a_jpegs_colour_profile(tmp_path, profile_size):
     """A JPEG's ICC profile (one APP2 segment, or a big one split over three) is carried into
@@ -144,7 +190,8 @@ def test_rectify_keeps_a_jpegs_colour_profile(tmp_path, profile_size):
     if profile_size == "srgb":
         profile = ImageCms.ImageCmsProfile(ImageCms.createProfile("sRGB")).tobytes()
     else:
-        profile = np.random.default_rng(3).integers(0, 256, profile_size, np.uint8).tobytes()
+        payload = np.random.default_rng(3).integers(0, 256, profile_size, np.uint8).tobytes()
+        profile = icc_profile(b"RGB ", b"mntr", payload)
     folder = tmp_path / "in"
     folder.mkdir()
     picture = Image.fromarray(cv2.cvtColor(cv2.imread(str(PHOTO)), cv2.COLOR_BGR2RGB))

@@ -579,3 +579,186 @@ def test_lens_shrink_from_the_maps_matches_the_lens_projection():
     expected = largest_singular_value(a, b, c, d).reshape(shrink.shape)
     assert expected.max() > 1.5  # the case shrinks enough to be anti-aliased
     np.testing.assert_allclose(shrink, expected, rtol=0.01)
+
+
+# --------------------------------------------------------------------------------------------
+# Lenses whose model folds back: beyond the radius where the distorted radius stops growing,
+# like beyond the horizon, nothing is sampled or framed.
+# --------------------------------------------------------------------------------------------
+
+MAGENTA = np.array([255, 0, 255], np.uint8)
+FOLD_CASES = {
+    "k1=-5": dict(pan=20, tilt=15, roll=5, fx=400, fy=400, model="plumb_bob",
+                  coefficients=dict(k1=-5.0)),
+    "k1=-1": dict(pan=-20, tilt=15, roll=0, fx=240, fy=240, model="plumb_bob",
+                  coefficients=dict(k1=-1.0)),
+    "fisheye k1=-1": dict(pan=15, tilt=20, roll=12, fx=170, fy=170, model="equidistant",
+                          coefficients=dict(k1=-1.0)),
+    "rational k4=2": dict(pan=-20, tilt=10, roll=-8, fx=160, fy=155,
+                          model="rational_polynomial", coefficients=dict(k1=0.1, k4=2.0)),
+}
+
+
+def fold_of(camera: OpenCVCamera) -> tuple[float, float]:
+    """The normalized ideal radius where the distorted radius first stops growing, and the
+    largest distorted radius, found with OpenCV's own projection of rays along a line out of
+    the axis (inf, inf if it never stops, up to 89.9 degrees off axis)."""
+    radii = np.tan(np.linspace(0, math.radians(89.9), 200_001))
+    rays = np.column_stack([radii, np.zeros_like(radii), np.ones_like(radii)])[:, None, :]
+    zero = np.zeros(3)
+    if camera.model == "equidistant":
+        distorted, _ = cv2.fisheye.projectPoints(rays, zero, zero, np.eye(3),
+                                                 camera.coefficients)
+    else:
+        distorted, _ = cv2.projectPoints(rays, zero, zero, np.eye(3), camera.coefficients)
+    along = distorted.reshape(-1, 2)[:, 0]
+    stops = np.nonzero(np.diff(along) <= 0)[0]
+    if len(stops) == 0:
+        return math.inf, math.inf
+    return float(radii[stops[0]]), float(along[stops[0]])
+
+
+def fold_radius(camera: OpenCVCamera) -> float:
+    return fold_of(camera)[0]
+
+
+def render_with_no_ray_in_magenta(camera: OpenCVCamera) -> np.ndarray:
+    """The camera's image, with magenta at the pixels no ray reaches: those further from the
+    principal point (normalized) than the largest distorted radius."""
+    image = camera.render()
+    cols, rows = np.meshgrid(np.arange(WIDTH, dtype=float), np.arange(HEIGHT, dtype=float))
+    normalized = np.column_stack([cols.ravel(), rows.ravel(), np.ones(WIDTH * HEIGHT)]
+                                 ) @ np.linalg.inv(camera.k).T
+    unreached = np.hypot(normalized[:, 0], normalized[:, 1]) > fold_of(camera)[1]
+    image.reshape(-1, 3)[unreached] = MAGENTA
+    return image
+
+
+def output_ray_radius(camera: OpenCVCamera) -> np.ndarray:
+    """The normalized radius of the ray each default-frame output pixel looks along (inf
+    where the ray looks away from the wall), from the camera built from words."""
+    world = np.column_stack([camera.output_wall_points(), np.full(WIDTH * HEIGHT, DISTANCE)])
+    rays = world @ camera.camera_from_world.T
+    with np.errstate(divide="ignore", invalid="ignore"):
+        radius = np.where(rays[:, 2] > 0, np.hypot(rays[:, 0], rays[:, 1]) / rays[:, 2],
+                          np.inf)
+    return radius.reshape(HEIGHT, WIDTH)
+
+
+@pytest.fixture(scope="module")
+def folded(tmp_path_factory):
+    """Every folding case rendered through its OpenCV camera (magenta where no ray reaches),
+    then rectified by one gsrwt call with --alpha."""
+    folder = tmp_path_factory.mktemp("folding")
+    rows = []
+    for index, case in enumerate(FOLD_CASES.values()):
+        camera = camera_of(case)
+        image = render_with_no_ray_in_magenta(camera)
+        cv2.imwrite(str(folder / f"{index}.png"), image)
+        rows.append(sidecar_row(f"{index}.png", case))
+    columns = sorted({key for row in rows for key in row}, key=lambda k: (k != "image", k))
+    lines = [",".join(columns)] + [",".join(str(row.get(c, "")) for c in columns) for row in rows]
+    (folder / "views.csv").write_text("\n".join(lines) + "\n")
+    result = run_gsrwt("rectify", str(folder), "--sidecar", str(folder / "views.csv"),
+                       "-o", str(folder / "out"), "--no-antialias", "--alpha")
+    assert result.returncode == 0, result.stderr
+    return folder
+
+
+@pytest.mark.parametrize("index, name", list(enumerate(FOLD_CASES)))
+def test_nothing_beyond_a_folding_lens_radius_is_sampled(folded, index, name):
+    """Output pixels whose ray lies beyond the fold radius are transparent fill, never the
+    mirrored picture; those within it and inside the image are the picture, as OpenCV's own
+    camera projects it; and no output pixel is the magenta of pixels no ray reaches."""
+    camera = camera_of(FOLD_CASES[name])
+    fold = fold_radius(camera)
+    assert math.isfinite(fold)
+    image = cv2.imread(str(folded / f"{index}.png"))
+    output = cv2.imread(str(folded / "out" / f"{index}.png"), cv2.IMREAD_UNCHANGED)
+    seen = output[..., 3] == 255
+    radius = output_ray_radius(camera)
+    beyond = radius > fold * 1.005
+    expected, inside = camera.reference(image)
+    within = inside & (radius < fold * 0.995)
+    assert beyond.mean() > 0.05 and within.mean() > 0.05, (beyond.mean(), within.mean())
+    assert not seen[beyond].any(), f"{int(seen[beyond].sum())} pixels beyond the fold sampled"
+    assert seen[within].all()
+    assert not np.all(output[..., :3] == MAGENTA, axis=2)[seen].any()
+    well_inside = within & (radius < fold * 0.9)
+    assert psnr(output[..., :3], expected, well_inside) >= 35
+
+
+def test_a_view_wholly_beyond_the_fold_is_refused_with_the_reason(tmp_path):
+    """A frame that sees only rays beyond the fold radius is that image's error row (exit 1),
+    one line naming the fold; the batch's other image is rectified."""
+    cv2.imwrite(str(tmp_path / "a.png"), smooth_texture(HEIGHT, WIDTH, 3))
+    cv2.imwrite(str(tmp_path / "b.png"), smooth_texture(HEIGHT, WIDTH, 4))
+    (tmp_path / "views.csv").write_text(
+        "image,pan,tilt,focal,distortion_model,k1\n"
+        "a.png,0,0,600,plumb_bob,-5\n"  # folds 14.5 degrees (155 px) off axis
+        "b.png,0,0,600,plumb_bob,-0.1\n")
+    result = run_gsrwt("rectify", str(tmp_path / "a.png"), str(tmp_path / "b.png"),
+                       "--sidecar", str(tmp_path / "views.csv"), "--bbox", "600,0,700,100",
+                       "-o", str(tmp_path / "out"), "--table", "-")
+    assert result.returncode == 1
+    (line,) = [line for line in result.stderr.splitlines() if line.startswith("Error")]
+    assert "a.png" in line and "lens model folds back 14.5 degrees off axis" in line
+    assert "155 pixels" in line
+    assert (tmp_path / "out" / "b.png").exists() and not (tmp_path / "out" / "a.png").exists()
+    result = run_gsrwt("rectify", str(tmp_path / "a.png"), "--sidecar",
+                       str(tmp_path / "views.csv"), "--bbox", "full", "-o", str(tmp_path / "full"))
+    assert result.returncode == 0, result.stderr  # the whole image does see within it
+
+
+@pytest.mark.parametrize("model, coefficients", [
+    ("plumb_bob", [50.0, 0, 0, 0, 0]),
+    ("equidistant", [10.0, 0, 0, 0]),
+    ("plumb_bob", [-5.0, 0, 0, 0, 0]),
+    ("equidistant", [-1.0, 0, 0, 0]),
+    ("rational_polynomial", [0.1, 0, 0, 0, 0, 2.0, 0, 0]),
+])
+def test_the_inverse_of_a_strong_lens_is_its_monotonic_part(model, coefficients):
+    """Pixels of rays within the fold radius (any ray for a lens that never folds), put on
+    the image by OpenCV's projection, come back to their rays (where OpenCV's own fisheye
+    inverse stops at 90 degrees of distorted angle); pixels beyond any ray's reach have no
+    ideal pixel (NaN), and the lens never maps a ray beyond the fold."""
+    from gsrwt_cli.framing import lens_distortion
+
+    focal = 200.0
+    lens = lens_distortion(View(0, 0, focal, width=WIDTH, height=HEIGHT,
+                                lens=Lens(model, tuple(zip(Lens(model).opencv_names(),
+                                                           coefficients)))))
+    camera = OpenCVCamera(0, 0, 0, focal, focal, (WIDTH - 1) / 2, (HEIGHT - 1) / 2,
+                          model=model, coefficients=coefficients)
+    fold = min(fold_radius(camera), math.tan(math.radians(80)))
+    rng = np.random.default_rng(5)
+    radius = rng.uniform(0, fold * 0.995, 2000)
+    angle = rng.uniform(0, 2 * math.pi, 2000)
+    rays = np.column_stack([radius * np.cos(angle), radius * np.sin(angle), np.ones(2000)])
+    zero = np.zeros(3)
+    if model == "equidistant":
+        pixels, _ = cv2.fisheye.projectPoints(rays[:, None, :], zero, zero, camera.k,
+                                              camera.coefficients)
+    else:
+        pixels, _ = cv2.projectPoints(rays, zero, zero, camera.k, camera.coefficients)
+    pixels = pixels.reshape(-1, 2)
+    ideal = rays[:, :2] * focal + camera.k[:2, 2]
+    back = lens.undistort(pixels)
+    # Near the fold the inverse is ill-conditioned (d r_d / d r -> 0): there the ray must
+    # project back onto its pixel; further in it must be the ray itself.
+    again, _ = cv2.projectPoints(np.column_stack([(back - camera.k[:2, 2]) / focal,
+                                                  np.ones(2000)]), zero, zero, camera.k,
+                                 camera.coefficients) if model != "equidistant" else (
+        cv2.fisheye.projectPoints(np.column_stack([(back - camera.k[:2, 2]) / focal,
+                                                   np.ones(2000)])[:, None, :], zero, zero,
+                                  camera.k, camera.coefficients))
+    assert np.hypot(*(again.reshape(-1, 2) - pixels).T).max() < 0.01
+    assert (np.hypot(*((back - camera.k[:2, 2]) / focal).T) < fold * 1.0001).all()
+    conditioned = radius < 0.95 * fold
+    assert np.hypot(*(back - ideal)[conditioned].T).max() < 0.01
+    beyond = ideal + (ideal - camera.k[:2, 2]) * (fold * 1.2 / np.maximum(radius, 1e-9) - 1
+                                                  )[:, None]
+    if math.isfinite(fold_radius(camera)):
+        assert np.isnan(lens.distort(beyond)).all()
+        far = camera.k[:2, 2] + 5000 * np.column_stack([np.cos(angle), np.sin(angle)])
+        assert np.isnan(lens.undistort(far)).all()  # past the largest distorted radius

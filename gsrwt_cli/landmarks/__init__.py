@@ -34,6 +34,7 @@ from .edges import (
     grey8,
     grey_image,
     line_edges,
+    pixels8,
 )
 from .ght import DEFAULT_GHT_ORIENTATION_STEP_DEG, Match, Template, build_template, match_template
 from .hough import (
@@ -67,4 +68,5 @@ __all__ = [
     "hough_lines",
     "line_edges",
     "match_template",
+    "pixels8",
 ]

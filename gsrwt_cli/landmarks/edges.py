@@ -2,8 +2,9 @@
 
 Plain pixel coordinates: ``x`` is the column (to the right), ``y`` the row (downward), pixel
 centres at integers; angles in degrees. Images are 2-D ``uint8`` grey arrays or ``uint8`` BGR /
-BGRA colour arrays (:func:`grey_image`); :func:`grey8` and :func:`colour8` bring any image
-:func:`~gsrwt_cli.imaging.read_image` gives (8 or 16 bits, grey, colour, alpha) to 8 bits.
+BGRA colour arrays (:func:`grey_image`); :func:`pixels8` brings any image
+:func:`~gsrwt_cli.imaging.read_image` gives (8 to 32-bit integers, 32 or 64-bit floats; grey,
+colour, alpha) to 8 bits, :func:`grey8` and :func:`colour8` to 8-bit grey and BGR.
 
 The gradient orientation ``atan2(gy, gx)`` in ``[0, 360)`` points from dark to light: a dark
 left half and light right half gives 0 deg, dark top and light bottom gives 90 deg. It is
@@ -224,15 +225,47 @@ def compatible_bins(orientation_bin: int, tolerance_bins: int, bin_count: int) -
     return [(orientation_bin + d) % bin_count for d in range(-tolerance_bins, tolerance_bins + 1)]
 
 
+def pixels8(pixels: np.ndarray) -> NDArray[np.uint8]:
+    """The 8-bit version of any decoded image, channels kept: the one conversion of every
+    command that looks at pixels (estimate, rectify --auto, lines, match, their drawings).
+
+    Integers map their type's range ``[0, max]`` onto ``[0, 255]`` (negative values of signed
+    types are black). Floats are nominally ``[0, 1]`` (OpenCV's convention, and gsrwt's own
+    for the fill); an image with brighter finite values (a float copy of 0-255 or 0-65535
+    levels, a radiance map) is scaled by its brightest finite value instead, so that it is
+    not all white. NaN and -inf are black, +inf white.
+    """
+    pixels = np.asarray(pixels)
+    kind = pixels.dtype.kind
+    if pixels.dtype == np.uint8:
+        return pixels
+    if kind in "iu":
+        top = float(np.iinfo(pixels.dtype).max)
+        source = np.maximum(pixels, 0) if kind == "i" else pixels
+        if source.dtype not in (np.uint16, np.int8, np.int16, np.int32):
+            source = source.astype(np.float64)  # types OpenCV has no depth for
+    elif kind == "f":
+        finite = np.isfinite(pixels)
+        top = max(1.0, float(np.max(pixels, where=finite, initial=0.0)))
+        source = np.nan_to_num(pixels, nan=0.0, posinf=top, neginf=0.0)
+        np.maximum(source, 0.0, out=source)
+        if source.dtype not in (np.float32, np.float64):
+            source = source.astype(np.float32)
+    else:
+        raise TypeError(f"expected an image of integer or float samples, got {pixels.dtype}")
+    # Every value is now in [0, top]: convertScaleAbs's absolute value changes nothing.
+    return cv2.convertScaleAbs(source, alpha=255.0 / top)
+
+
 def colour8(pixels: np.ndarray) -> np.ndarray:
-    """An 8-bit BGR copy of any decoded image (8 or 16 bits; grey, BGR or BGRA), for drawing."""
-    if pixels.dtype != np.uint8:
-        pixels = cv2.convertScaleAbs(pixels, alpha=255.0 / float(np.iinfo(pixels.dtype).max))
+    """An 8-bit BGR copy of any decoded image (:func:`pixels8`; grey, BGR or BGRA), for
+    drawing."""
+    pixels = pixels8(pixels)
     if pixels.ndim == 2:
         return cv2.cvtColor(pixels, cv2.COLOR_GRAY2BGR)
     return pixels[..., :3].copy()
 
 
 def grey8(pixels: np.ndarray) -> GreyImage:
-    """The 8-bit grey version of any decoded image (as :func:`colour8`), for edge search."""
-    return cv2.cvtColor(colour8(pixels), cv2.COLOR_BGR2GRAY)
+    """The 8-bit grey version of any decoded image (:func:`pixels8`), for edge search."""
+    return grey_image(pixels8(pixels))
