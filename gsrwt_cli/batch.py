@@ -330,7 +330,7 @@ def process_job(job: Job, settings: Settings, scratch: Scratch | None = None) ->
                 else:
                     write_atomic(job.output, encoded, root=settings.root)
         row.update(_geometry(info), image=str(job.source), made_with=_made_with(job, settings),
-                   status="skipped" if checking else "ok")
+                   status="skipped" if checking else "planned" if settings.dry_run else "ok")
     except Exception as error:  # every failure of one image is that image's row
         row.update(status="error", error=_error_text(error, settings.describe))
     return row
@@ -448,10 +448,13 @@ class Counts:
     skipped: int = 0
     failed: int = 0
     interrupted: int = 0
+    planned: int = 0  # --dry-run: checked, not written
 
     def add(self, row: dict[str, Any]) -> None:
         if row["status"] == "ok":
             self.ok += 1
+        elif row["status"] == "planned":
+            self.planned += 1
         elif row["status"] == "skipped":
             self.skipped += 1
         elif row["status"] == "interrupted":

@@ -389,7 +389,7 @@ def test_alpha_ext_dry_run_and_table_formats(tmp_path):
                   "--table", str(tmp_path / "dry.json"))
     assert dry.exit_code == 0, dry.output
     (row,) = json.loads((tmp_path / "dry.json").read_text())
-    assert row["status"] == "ok" and row["out_width"] == 320
+    assert row["status"] == "planned" and row["out_width"] == 320
     assert not (tmp_path / "dry").exists()
     result = rectify(str(folder), *view, "--alpha", "--ext", "png", "--bbox", "full",
                      "-o", str(tmp_path / "out"), "--table", "-")

@@ -20,6 +20,7 @@ import cv2
 import imagesize
 import pytest
 from conftest import run_gsrwt, smooth_texture
+from test_faults import POSE, make_photos, table_rows
 
 from gsrwt_cli.calibration import write_opencv_yaml
 from gsrwt_cli.camera import Intrinsics, Lens
@@ -350,3 +351,20 @@ def test_a_corrupt_row_of_a_file_made_otherwise_is_an_error_with_bounded_words(t
                       "-o", "out", cwd=tmp_path)
     assert again.returncode == 1 and HUGE[:200] not in again.stderr + path.read_text()
     assert "no valid row of the previous table records it" in again.stderr
+
+
+def test_a_dry_run_records_planned_rows_and_the_real_run_writes_them(tmp_path):
+    """``--dry-run`` writes the table of a run that writes nothing: its rows say ``planned``
+    (never ``ok`` for a file that is not on disk), and the real run after it writes every
+    output (``ok``, none ``skipped``)."""
+    folder = tmp_path / "in"
+    make_photos(folder, 3, (160, 120))
+    dry = run_gsrwt("rectify", str(folder), *POSE, "-o", "out", "--dry-run", cwd=tmp_path)
+    assert dry.returncode == 0, dry.stderr
+    assert "3 planned, 0 ok, 0 skipped, 0 failed" in dry.stderr
+    rows = table_rows(tmp_path / "out" / "gsrwt.csv")
+    assert [row["status"] for row in rows] == ["planned"] * 3
+    assert sorted(path.name for path in (tmp_path / "out").iterdir()) == ["gsrwt.csv"]
+    real = run_gsrwt("rectify", str(folder), *POSE, "-o", "out", cwd=tmp_path)
+    assert real.returncode == 0 and "3 ok, 0 skipped, 0 failed" in real.stderr, real.stderr
+    assert [row["status"] for row in table_rows(tmp_path / "out" / "gsrwt.csv")] == ["ok"] * 3

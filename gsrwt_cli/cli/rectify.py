@@ -428,7 +428,8 @@ def dask_executor(address: str, processes: int, retries: int,
 @click.option("-j", "--jobs", type=click.IntRange(min=1), default=None,
               help="Worker processes [default: all cores].")
 @click.option("--overwrite", is_flag=True, help="Replace existing outputs instead of skipping.")
-@click.option("--dry-run", is_flag=True, help="Check everything and write the table only.")
+@click.option("--dry-run", is_flag=True,
+              help="Check everything and write the table only (status `planned`).")
 @click.option("--scheduler", default=None, metavar="ADDRESS", envvar="DASK_SCHEDULER_ADDRESS",
               help="Run the images as tasks of a Dask cluster: its scheduler's address "
                    "(tcp://HOST:8786), or local for a local cluster of -j worker processes "
@@ -603,6 +604,8 @@ def rectify(
     finally:
         progress.close()
     summary = f"{counts.ok} ok, {counts.skipped} skipped, {counts.failed} failed"
+    if dry_run:
+        summary = f"{counts.planned} planned, {summary}"
     if stopped is not None:
         summary += f", {counts.interrupted} not done"
     end_batch(summary, "" if table_path == "-" else f"; table: {table_path}", stopped,
