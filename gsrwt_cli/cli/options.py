@@ -170,7 +170,8 @@ def target_message(error: TargetError, option: str | None = None) -> str:
 
 
 def make_output_directory(option: str, directory: Path) -> None:
-    """Create the output directory the user named, or stop with one line saying why not."""
+    """Create the output directory the user named and prove it writable, or stop with one
+    line saying why not."""
     from ..targets import TargetError
     from ..targets import make_output_directory as create_directory
 
@@ -178,6 +179,7 @@ def make_output_directory(option: str, directory: Path) -> None:
         create_directory(directory)
     except TargetError as error:
         raise InputError(target_message(error, option)) from None
+    prepare_directory(directory, f"{option} {directory}")
 
 
 def format_option(func: F) -> F:
