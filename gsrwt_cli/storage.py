@@ -152,7 +152,12 @@ def _check_reachable(url: str) -> None:
     credentials may not look (the caller's own request says so in its words); anything
     else (no endpoint, no such profile, no credentials) raises :class:`StoreError`."""
     scheme = url.split("://", 1)[0].lower()
-    options = {"config_kwargs": FIRST_REQUEST_CONFIG} if scheme in ("s3", "s3a") else {}
+    options = {}
+    if scheme in ("s3", "s3a"):  # the user's fsspec configuration (addressing style...) kept
+        from fsspec.config import conf
+
+        configured = conf.get(scheme, {}).get("config_kwargs") or {}
+        options["config_kwargs"] = {**configured, **FIRST_REQUEST_CONFIG}
     fs, path = _open_filesystem(url, **options)
     try:
         fs.info(path)
