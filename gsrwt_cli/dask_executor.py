@@ -21,6 +21,7 @@ client.
 
 from __future__ import annotations
 
+import asyncio
 import contextlib
 import itertools
 import os
@@ -252,6 +253,37 @@ def _sigint_ignored() -> Iterator[None]:
         signal.signal(signal.SIGINT, saved)
 
 
+def _reach(address: str) -> None:
+    """Open and close one connection to the scheduler at ``address``, with the security
+    settings a :class:`Client` would use, or raise :class:`SchedulerError` saying why not.
+
+    A ``Client`` that fails to connect stays half-made: its finalizer waits 10 s and prints
+    a traceback long after our error line. An address it could not use (no port, a
+    ``tls://`` address without TLS settings, nobody listening) is found here instead,
+    within :data:`CONNECT_TIMEOUT_SECONDS`, and no ``Client`` is made."""
+    from distributed import client as client_module
+    from distributed.comm import connect as open_comm
+    from distributed.security import Security
+
+    loader = getattr(client_module, "_maybe_call_security_loader", None)  # as Client does
+    security = (loader(address) if loader is not None else None) or Security()
+    arguments = security.get_connection_args("client")
+    if address.lower().startswith("tls://") and arguments.get("ssl_context") is None:
+        raise SchedulerError("cannot connect to the scheduler (a tls:// address needs Dask's "
+                             "TLS settings: distributed.comm.tls.ca-file, .client.cert, "
+                             ".client.key)")
+
+    async def reach() -> None:
+        comm = await open_comm(address, timeout=CONNECT_TIMEOUT_SECONDS, **arguments)
+        await comm.close()
+
+    try:
+        asyncio.run(reach())
+    except Exception as error:  # ValueError (no port), OSError, TimeoutError, TypeError...
+        reason = " ".join(str(error).split()) or type(error).__name__
+        raise SchedulerError(f"cannot connect to the scheduler ({reason})") from None
+
+
 @contextlib.contextmanager
 def connect(address: str, workers: int, retries: int) -> Iterator[Client]:
     """A client of the scheduler at ``address``, or of a :class:`LocalCluster` of ``workers``
@@ -287,6 +319,7 @@ def connect(address: str, workers: int, retries: int) -> Iterator[Client]:
                 raise SchedulerError(f"cannot start a local cluster ({error})") from None
             target: Any = cluster
         else:
+            _reach(address)
             target = address
         try:
             client = stack.enter_context(Client(target, timeout=CONNECT_TIMEOUT_SECONDS,

@@ -29,12 +29,12 @@ import io
 from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path, PurePosixPath
-from typing import Any
+from typing import IO, Any
 
 from .camera import VIEW_FIELDS, View
 from .messages import escape_controls, one_line, quote
 from .records import SIDECAR_FIELDS, merge_values, view_from_values
-from .storage import is_url, location
+from .storage import Location, is_url, location
 
 #: :data:`~gsrwt_cli.records.SIDECAR_FIELDS` as a set, for the test of every CSV row.
 SIDECAR_FIELD_SET = frozenset(SIDECAR_FIELDS)
@@ -128,10 +128,14 @@ def display_path(path: str | Path) -> str:
     return escape_controls(str(path))
 
 
-def _check_is_file(path: Path) -> None:
-    if not path.exists():
+def _check_is_file(path: Path | Location) -> None:
+    try:
+        exists, is_dir = path.exists(), path.is_dir()
+    except OSError as error:  # a store that cannot be reached (storage.StoreError)
+        raise SidecarError(f"{display_path(path)}: cannot read ({error.strerror})") from None
+    if not exists:
         raise SidecarError(f"{display_path(path)}: no such file")
-    if path.is_dir():
+    if is_dir:
         raise SidecarError(f"{display_path(path)}: is a directory, not a sidecar file")
 
 
@@ -193,7 +197,7 @@ def iter_sidecar_chunks(path: str | Path, size: int = CHUNK_ROWS) -> Iterator[Si
     TSV file's as it is read (:class:`CsvChunk`, whose cells a caller may also take as
     columns), a YAML file's all at once. Raises :class:`SidecarError` as that does, after the
     chunk of the rows before the fault."""
-    path = Path(path)
+    path = location(path)  # a local path, or a URL (s3://...)
     suffix = _sidecar_suffix(path)
     if suffix in (".yaml", ".yml"):
         yield RecordChunk(load_sidecar(path).records)
@@ -201,12 +205,20 @@ def iter_sidecar_chunks(path: str | Path, size: int = CHUNK_ROWS) -> Iterator[Si
     _check_is_file(path)
     name = display_path(path)
     try:
-        with path.open(encoding="utf-8-sig", newline="") as stream:
+        with _open_text(path) as stream:
             yield from _csv_chunks(path, stream, "\t" if suffix == ".tsv" else ",", size)
     except UnicodeDecodeError as error:
         raise SidecarError(f"{name}: not UTF-8 text ({error.reason})") from None
     except OSError as error:
         raise SidecarError(f"{name}: cannot read ({error.strerror})") from None
+
+
+def _open_text(path: Path | Location) -> IO[str]:
+    """A sidecar's text stream (UTF-8, an optional BOM removed): a local file, or an object
+    read as it is taken."""
+    if isinstance(path, Location):
+        return io.TextIOWrapper(path.open_read(), encoding="utf-8-sig", newline="")
+    return path.open(encoding="utf-8-sig", newline="")
 
 
 @dataclass(frozen=True)

@@ -13,15 +13,25 @@ S3, or a multipart upload that the store shows only once complete), never a part
 object. A process keeps the names of the directories it listed (:func:`list_files`), so
 that looking for ``NAME.yaml`` beside 100,000 listed images asks the store nothing more;
 :meth:`Location.exists` always asks (outputs change while a batch runs).
+
+Every failure of a store is an ``OSError`` whose ``strerror`` says what went wrong in the
+store's words (:class:`StoreError` for what is no ``OSError`` of its own: an endpoint that
+cannot be reached, a missing profile, fsspec or the store's package not installed), so
+callers word it as they word a local file's. The first time a process uses a store (a
+bucket), it is asked once with no retries and short timeouts (:func:`_check_reachable`): an
+unreachable endpoint fails in seconds, not after botocore's retries.
 """
 
 from __future__ import annotations
 
 import contextlib
+import errno
 import io
+import os
 import posixpath
 import re
 import threading
+import uuid
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path, PurePosixPath
@@ -32,6 +42,53 @@ URL_PATTERN = re.compile(r"^[A-Za-z][A-Za-z0-9+.-]*://")
 
 _LISTED: dict[str, set[str]] = {}  # directory URL -> names of the files listed in it
 _FETCHED = threading.local()  # the object a job of this thread read whole: url, bytes
+_REACHED: set[str] = set()  # stores (scheme://bucket) this process has reached
+_PROBED: set[str] = set()  # prefixes this process has written a probe object to
+
+#: How the first request to an S3 store is made (:func:`_check_reachable`): one attempt,
+#: short timeouts, so that an unreachable endpoint is an error in seconds. Later requests
+#: keep botocore's retries, for a long batch's passing faults.
+FIRST_REQUEST_CONFIG = {"connect_timeout": 3, "read_timeout": 10,
+                        "retries": {"max_attempts": 1, "mode": "standard"}}
+#: Characters of a store's own error message kept in ours.
+STORE_MESSAGE_LIMIT = 240
+#: The ``OSError`` classes a store's error keeps, with their error numbers (callers tell a
+#: missing object by its class); any other failure becomes a :class:`StoreError`.
+_KEPT_ERRORS: dict[type[OSError], int] = {
+    FileNotFoundError: errno.ENOENT, PermissionError: errno.EACCES,
+    IsADirectoryError: errno.EISDIR, NotADirectoryError: errno.ENOTDIR,
+    FileExistsError: errno.EEXIST,
+}
+
+
+class StoreError(OSError):
+    """A store named by URL cannot be used; ``strerror`` says why in one line: it cannot
+    be reached, refuses the credentials, or its package is not installed."""
+
+
+def _store_message(error: BaseException) -> str:
+    """A store's error on one bounded line: its own words, else its type's name."""
+    text = " ".join(str(error.strerror if isinstance(error, OSError) and error.strerror
+                        else error).split())
+    if len(text) > STORE_MESSAGE_LIMIT:
+        text = text[: STORE_MESSAGE_LIMIT - 3] + "..."
+    return text or type(error).__name__
+
+
+@contextlib.contextmanager
+def _asking(url: str) -> Iterator[None]:
+    """While the block asks the store about ``url``, any failure leaves as an ``OSError``
+    with a ``strerror`` (:data:`_KEPT_ERRORS` keep their class, the rest are
+    :class:`StoreError`), naming ``url``."""
+    try:
+        yield
+    except StoreError:
+        raise
+    except tuple(_KEPT_ERRORS) as error:
+        kind = next(kind for kind in _KEPT_ERRORS if isinstance(error, kind))
+        raise kind(error.errno or _KEPT_ERRORS[kind], _store_message(error), url) from error
+    except Exception as error:  # botocore's, aiohttp's...: not OSErrors of their own
+        raise StoreError(errno.EIO, _store_message(error), url) from error
 
 
 def is_url(text: object) -> bool:
@@ -52,11 +109,78 @@ def location(text: str | Path) -> Path | Location:
 
 
 def _filesystem(url: str) -> tuple[Any, str]:
-    import fsspec  # the dask extra; imported here so that local runs never import it
+    """The file system of ``url`` and its path there; the first time this process uses
+    the store, it is asked whether it answers (:func:`_check_reachable`). Raises
+    :class:`StoreError` when fsspec or the store's package is missing, the scheme is
+    unknown, or the store cannot be reached."""
+    found = _open_filesystem(url)
+    store = _store_of(url)
+    if store not in _REACHED:
+        _check_reachable(url)
+        _REACHED.add(store)
+    return found
 
-    # No listings cache: outputs appear while a batch runs, and a stale listing would call
-    # a written object missing (this module keeps its own names of listed inputs).
-    return fsspec.core.url_to_fs(url, use_listings_cache=False)
+
+def _open_filesystem(url: str, **options: Any) -> tuple[Any, str]:
+    try:
+        import fsspec  # the dask extra; imported here so that local runs never import it
+    except ImportError as error:
+        raise StoreError(errno.ENOSYS, f"URLs need fsspec ({error}); install it with "
+                         "pip install 'gsrwt[dask]'", url) from None
+    scheme = url.split("://", 1)[0]
+    try:
+        # No listings cache: outputs appear while a batch runs, and a stale listing would
+        # call a written object missing (this module keeps its own names of listed inputs).
+        return fsspec.core.url_to_fs(url, use_listings_cache=False, **options)
+    except ImportError as error:  # fsspec knows the scheme; its package is missing
+        raise StoreError(errno.ENOSYS, f"{scheme}:// URLs need a package that is not "
+                         f"installed ({_store_message(error)})", url) from None
+    except Exception as error:  # an unknown scheme (ValueError), a bad configuration...
+        raise StoreError(errno.EINVAL, f"cannot use {scheme}:// URLs "
+                         f"({_store_message(error)})", url) from None
+
+
+def _store_of(url: str) -> str:
+    """``scheme://bucket``: what one check of a store covers (its endpoint, credentials)."""
+    scheme, rest = url.split("://", 1)
+    return f"{scheme.lower()}://{rest.lstrip('/').split('/', 1)[0]}"
+
+
+def _check_reachable(url: str) -> None:
+    """Ask the store about ``url`` once, without retries and with short timeouts on S3
+    (:data:`FIRST_REQUEST_CONFIG`). Its answer may be that nothing is there, or that the
+    credentials may not look (the caller's own request says so in its words); anything
+    else (no endpoint, no such profile, no credentials) raises :class:`StoreError`."""
+    scheme = url.split("://", 1)[0].lower()
+    options = {}
+    if scheme in ("s3", "s3a"):  # the user's fsspec configuration (addressing style...) kept
+        from fsspec.config import conf
+
+        configured = conf.get(scheme, {}).get("config_kwargs") or {}
+        options["config_kwargs"] = {**configured, **FIRST_REQUEST_CONFIG}
+    fs, path = _open_filesystem(url, **options)
+    try:
+        fs.info(path)
+    except OSError:
+        return
+    except Exception as error:  # botocore's, aiohttp's...: the store did not answer
+        raise StoreError(errno.EIO, _store_message(error), url) from error
+
+
+def check_writable(prefix: Location) -> None:
+    """Prove that objects can be written below ``prefix``: a probe object of a name like
+    our temporary files' (``.gsrwt-probe.gsrwt-PID-XXXX.part``, hidden from listings) is
+    written and removed, once per prefix and process. Raises an ``OSError`` naming
+    ``prefix`` with the store's reason (no such bucket, access denied, no endpoint)."""
+    if prefix.url in _PROBED:
+        return
+    probe = prefix / f".gsrwt-probe.gsrwt-{os.getpid()}-{uuid.uuid4().hex[:8]}.part"
+    fs, path = _filesystem(probe.url)
+    with _asking(prefix.url):
+        fs.pipe_file(path, b"")
+    with contextlib.suppress(Exception):  # a store that lets us write but not remove
+        fs.rm_file(path)
+    _PROBED.add(prefix.url)
 
 
 @dataclass(frozen=True)
@@ -117,8 +241,9 @@ class Location:
     # -- the store -----------------------------------------------------------------------
     def exists(self) -> bool:
         """Whether an object (or a prefix) is there now: the store is asked."""
-        fs, path = _filesystem(self.url)
-        return bool(fs.exists(path))
+        with _asking(self.url):
+            fs, path = _filesystem(self.url)
+            return bool(fs.exists(path))
 
     def is_file(self) -> bool:
         """Whether an object is there: from this process's listing of its directory
@@ -126,18 +251,20 @@ class Location:
         listed = _LISTED.get(self.parent.url)
         if listed is not None:
             return self.name in listed
-        fs, path = _filesystem(self.url)
-        try:
-            return bool(fs.isfile(path))
-        except OSError:
-            return False
+        with _asking(self.url):
+            fs, path = _filesystem(self.url)
+            try:
+                return bool(fs.isfile(path))
+            except OSError:
+                return False
 
     def is_dir(self) -> bool:
-        fs, path = _filesystem(self.url)
-        try:
-            return bool(fs.isdir(path))
-        except OSError:
-            return False
+        with _asking(self.url):
+            fs, path = _filesystem(self.url)
+            try:
+                return bool(fs.isdir(path))
+            except OSError:
+                return False
 
     def read_bytes(self, limit: int | None = None) -> bytes:
         """The object's bytes (its first ``limit``): the one a job of this thread fetched
@@ -145,10 +272,11 @@ class Location:
         cached = getattr(_FETCHED, "item", None)
         if cached is not None and cached[0] == self.url:
             return cached[1] if limit is None else cached[1][:limit]
-        fs, path = _filesystem(self.url)
-        if fs.isdir(path):
-            raise IsADirectoryError(21, "Is a directory", self.url)
-        return fs.cat_file(path, start=None, end=limit)
+        with _asking(self.url):
+            fs, path = _filesystem(self.url)
+            if fs.isdir(path):
+                raise IsADirectoryError(errno.EISDIR, "Is a directory", self.url)
+            return fs.cat_file(path, start=None, end=limit)
 
     def read_text(self, encoding: str = "utf-8", errors: str = "strict") -> str:
         return self.read_bytes().decode(encoding, errors)
@@ -159,24 +287,27 @@ class Location:
         cached = getattr(_FETCHED, "item", None)
         if cached is not None and cached[0] == self.url:
             return io.BytesIO(cached[1])
-        fs, path = _filesystem(self.url)
-        if fs.isdir(path):
-            raise IsADirectoryError(21, "Is a directory", self.url)
-        return fs.open(path, "rb", block_size=1 << 16, cache_type="readahead")
+        with _asking(self.url):
+            fs, path = _filesystem(self.url)
+            if fs.isdir(path):
+                raise IsADirectoryError(errno.EISDIR, "Is a directory", self.url)
+            return fs.open(path, "rb", block_size=1 << 16, cache_type="readahead")
 
     def write_whole(self, data: bytes) -> None:
         """Write the object in one request: it appears whole or not at all."""
-        fs, path = _filesystem(self.url)
-        fs.pipe_file(path, bytes(data))
+        with _asking(self.url):
+            fs, path = _filesystem(self.url)
+            fs.pipe_file(path, bytes(data))
 
     def list_objects(self) -> set[str]:
         """The URLs of every object below this prefix (one listing), empty if none."""
-        fs, _ = _filesystem(self.url)
-        base = fs._strip_protocol(self.url).rstrip("/")
-        try:
-            names = fs.find(base, withdirs=False, detail=False)
-        except (FileNotFoundError, NotADirectoryError):
-            return set()
+        with _asking(self.url):
+            fs, _ = _filesystem(self.url)
+            base = fs._strip_protocol(self.url).rstrip("/")
+            try:
+                names = fs.find(base, withdirs=False, detail=False)
+            except (FileNotFoundError, NotADirectoryError):
+                return set()
         return {(self / fs._strip_protocol(name)[len(base) + 1:]).url for name in names
                 if fs._strip_protocol(name).startswith(base + "/")}
 
@@ -194,9 +325,10 @@ def list_files(prefix: Location, recursive: bool) -> list[tuple[Location, PurePo
     ``prefix``; names beginning with a dot (and what lies below them) are left out. The
     names are kept for :meth:`Location.is_file`. One listing of the store.
     """
-    fs, path = _filesystem(prefix.url)
-    base = fs._strip_protocol(prefix.url).rstrip("/")
-    found = fs.find(base, maxdepth=None if recursive else 1, withdirs=False, detail=False)
+    with _asking(prefix.url):
+        fs, _ = _filesystem(prefix.url)
+        base = fs._strip_protocol(prefix.url).rstrip("/")
+        found = fs.find(base, maxdepth=None if recursive else 1, withdirs=False, detail=False)
     listed = []
     for name in found:
         stripped = fs._strip_protocol(name)

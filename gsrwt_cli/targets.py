@@ -21,6 +21,7 @@ from .outputs import (
     remove_stale_temporaries,
     write_atomic,
 )
+from .storage import Location
 
 if TYPE_CHECKING:
     import numpy as np
@@ -97,13 +98,23 @@ def output_target(root: Path, relative: PurePosixPath | str) -> Path:
     return target
 
 
-def check_new_files(targets: Iterable[Path], inputs: Iterable[Path], overwrite: bool) -> None:
-    """Raise :class:`InputOverwriteError` for the first target that is one of ``inputs``, or
-    :class:`ExistingOutputError` for one that exists (unless ``overwrite``), in order."""
-    protected = {os.path.realpath(path) for path in inputs}
+def real_paths(paths: Iterable[Path | Location]) -> set[str]:
+    """The real paths (links resolved) of the local ``paths``; URLs (inputs read from a
+    store) are left out: no local file can be one."""
+    return {os.path.realpath(path) for path in paths if not isinstance(path, Location)}
+
+
+def check_new_files(targets: Iterable[Path], inputs: Iterable[Path | Location],
+                    overwrite: bool) -> None:
+    """Raise, for the first target in order that is one: :class:`InputOverwriteError` if
+    it is one of ``inputs``, :class:`DirectoryTargetError` if it is a directory (no file can
+    replace it), :class:`ExistingOutputError` if it exists (unless ``overwrite``)."""
+    protected = real_paths(inputs)
     for target in targets:
         if os.path.realpath(target) in protected:
             raise InputOverwriteError(target)
+        if os.path.isdir(target):
+            raise DirectoryTargetError(target)
         if os.path.lexists(target) and not overwrite:
             raise ExistingOutputError(target)
 
@@ -129,12 +140,12 @@ class Drawings:
     second is refused rather than silently given another name or drawn over the first.
     """
 
-    def __init__(self, directory: Path, inputs: Iterable[Path]) -> None:
+    def __init__(self, directory: Path, inputs: Iterable[Path | Location]) -> None:
         self.directory = directory
-        self.protected = {os.path.realpath(path) for path in inputs}
+        self.protected = real_paths(inputs)
         self.drawn: dict[str, Path] = {}  # real path of a picture -> the image it shows
 
-    def target(self, image: Path) -> Path:
+    def target(self, image: Path | Location) -> Path:
         """The picture's file for ``image``, or :class:`ValueError` saying why there is none."""
         target = self.directory / (image.stem + ".png")
         try:

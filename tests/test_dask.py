@@ -153,6 +153,19 @@ def test_an_unreachable_scheduler_is_one_line_exit_2(tmp_path):
     assert not (tmp_path / "out" / "gsrwt.csv").exists()
 
 
+@pytest.mark.parametrize("address", ["garbage", "tls://127.0.0.1:1", "foo://127.0.0.1:1"])
+def test_a_scheduler_address_it_cannot_use_is_one_line_exit_2(tmp_path, address):
+    """No port, a tls:// address without TLS settings, an unknown scheme: one line naming the
+    address and why, exit 2, and nothing after it (no half-made Client's traceback from its
+    finalizer, which waited 10 s to print one)."""
+    result = run_gsrwt("rectify", str(SAMPLES / "door_p8_t-2_f1500.jpg"), *POSE, "-o", "out",
+                       "--scheduler", address, cwd=tmp_path)
+    assert result.returncode == 2, result.stderr
+    (line,) = result.stderr.splitlines()
+    assert line.startswith(f"Error: --scheduler {address}: cannot connect to the scheduler ("), line
+    assert not (tmp_path / "out" / "gsrwt.csv").exists()
+
+
 def test_without_dask_the_scheduler_option_says_how_to_install_it(tmp_path):
     blocker = tmp_path / "blocker"  # an interpreter on which dask cannot be imported
     for name in ("dask", "distributed"):

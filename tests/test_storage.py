@@ -273,6 +273,145 @@ def test_a_table_and_outputs_on_s3_from_local_inputs(s3, tmp_path):
 
 
 # --------------------------------------------------------------------------------------------
+# A store that cannot be used: one line, exit 2, before any work
+# --------------------------------------------------------------------------------------------
+
+DOOR_POSE = ("--pan", "8", "--tilt", "-2", "--focal", "1500")
+
+
+def closed_endpoint() -> dict[str, str]:
+    """The environment of an S3 endpoint nobody listens on (a loopback port just freed)."""
+    endpoint = f"http://127.0.0.1:{free_port()}"
+    return {"AWS_ENDPOINT_URL": endpoint, "AWS_ENDPOINT_URL_S3": endpoint,
+            "FSSPEC_S3_ENDPOINT_URL": endpoint}
+
+
+#: name -> (the environment's changes, the arguments, what the one line must say). Each
+#: run also has local images it would rectify into ``o`` if it got that far.
+STORE_FAULTS = {
+    "output-in-no-bucket": ({}, ["s3://faults/in/", *DOOR_POSE, "-o",
+                                 "s3://no-such-bucket/out/"],
+                            "-o s3://no-such-bucket/out: cannot write there (The specified "
+                            "bucket does not exist)"),
+    "table-in-no-bucket": ({}, ["s3://faults/in/", *DOOR_POSE, "-o", "o", "--table",
+                                "s3://no-such-bucket/t.csv"],
+                           "--table s3://no-such-bucket/t.csv: cannot write there (The "
+                           "specified bucket does not exist)"),
+    "input-unreachable": ("closed", ["s3://faults/in/", *DOOR_POSE, "-o", "o"],
+                          "s3://faults/in/: cannot read (Could not connect to the endpoint"),
+    "sidecar-unreachable": ("closed", [str(SAMPLES / "door_p8_t-2_f1500.jpg"), "--sidecar",
+                                       "s3://faults/views.csv", "-o", "o"],
+                            "s3://faults/views.csv: cannot read (Could not connect to the "
+                            "endpoint"),
+    "input-missing-profile": ({"AWS_PROFILE": "no-such-profile"},
+                              ["s3://faults/in/", *DOOR_POSE, "-o", "o"],
+                              "s3://faults/in/: cannot read (The config profile "
+                              "(no-such-profile) could not be found)"),
+    "sidecar-missing-profile": ({"AWS_PROFILE": "no-such-profile"},
+                                [str(SAMPLES / "door_p8_t-2_f1500.jpg"), "--sidecar",
+                                 "s3://faults/views.csv", "-o", "o"],
+                                "s3://faults/views.csv: cannot read (The config profile "
+                                "(no-such-profile) could not be found)"),
+}
+
+
+@pytest.fixture(scope="module")
+def fault_bucket(s3):
+    fs, _ = s3
+    fs.mkdir("faults")
+    for name in ("door_p8_t-2_f1500.jpg", "door_p20_t-8_f800.jpg"):
+        fs.pipe_file(f"faults/in/{name}", (SAMPLES / name).read_bytes())
+    fs.pipe_file("faults/views.csv", (SAMPLES / "views.csv").read_bytes())
+    return fs
+
+
+@pytest.mark.parametrize("case", sorted(STORE_FAULTS))
+def test_a_store_that_cannot_be_used_is_one_line_exit_2_before_any_work(
+        s3, fault_bucket, tmp_path, case):
+    """A missing bucket under -o or --table, an endpoint nobody answers, a profile that
+    does not exist: for inputs, sidecars and outputs, one line naming the URL and the
+    store's reason, exit 2, no image decoded or written, nothing in the store changed."""
+    _, environment = s3
+    changes, args, expected = STORE_FAULTS[case]
+    changes = closed_endpoint() if changes == "closed" else changes
+    before = fault_bucket.find("faults")
+    result = run({**environment, **changes}, "rectify", *args, cwd=tmp_path)
+    assert result.returncode == 2, result.stderr
+    (line,) = result.stderr.splitlines()
+    assert line.startswith(f"Error: {expected}"), line
+    assert "internal error" not in line
+    assert not (tmp_path / "o").exists() or not any((tmp_path / "o").iterdir())
+    assert fault_bucket.find("faults") == before
+
+
+def test_every_command_takes_urls_for_what_it_reads(s3, fault_bucket, tmp_path):
+    """params, estimate, lines, match and render read their files from URLs as rectify
+    does (never a local ``s3:/...``); the options that write local files refuse a URL in
+    one line."""
+    _, environment = s3
+    fault_bucket.pipe_file("faults/knob.png", (ROOT / "sample_data" / "templates" /
+                                               "knob.png").read_bytes())
+    fault_bucket.pipe_file("faults/door.csv", b"image,pan,tilt,focal\n"
+                           b"door_p20_t-8_f800.jpg,20,-8,800\n")
+    door = "s3://faults/in/door_p20_t-8_f800.jpg"
+    params = run(environment, "params", "--sidecar", "s3://faults/door.csv", cwd=tmp_path)
+    assert params.returncode == 0, params.stderr
+    assert rows_of(params.stdout)[0]["theta_deg"] != ""
+    estimate = run(environment, "estimate", "s3://faults/in/", "--sidecar",
+                   "s3://faults/views.csv", "-o", "poses.csv", cwd=tmp_path)
+    assert estimate.returncode == 0, estimate.stderr
+    assert [row["image"] for row in rows_of((tmp_path / "poses.csv").read_text())] == [
+        "door_p20_t-8_f800.jpg", "door_p8_t-2_f1500.jpg"]  # sidecar rows: relative names
+    lines = run(environment, "lines", "s3://faults/in/", "--sidecar", "s3://faults/door.csv",
+                "-f", "csv", cwd=tmp_path)
+    assert lines.returncode == 0, lines.stderr
+    assert {row["image"] for row in rows_of(lines.stdout)} == {  # one not in the sidecar
+        door, "s3://faults/in/door_p8_t-2_f1500.jpg"}            # is taken as frontal
+    match = run(environment, "match", door, "--template", "s3://faults/knob.png",
+                "--sidecar", "s3://faults/door.csv", "-f", "csv", cwd=tmp_path)
+    assert match.returncode == 0, match.stderr
+    assert rows_of(match.stdout)[0]["template"] == "knob.png"
+    render = run(environment, "render", "s3://faults/knob.png", *DOOR_POSE, "-o", "r.png",
+                 cwd=tmp_path)
+    assert render.returncode == 0, render.stderr
+    assert (tmp_path / "r.png").is_file()
+    for args in (["lines", door, "--draw", "s3://faults/drawn"],
+                 ["estimate", door, "--focal", "800", "--draw", "s3://faults/drawn"],
+                 ["render", "s3://faults/knob.png", *DOOR_POSE, "-o", "s3://faults/r.png"]):
+        refused = run(environment, *args, cwd=tmp_path)
+        assert refused.returncode == 2, refused.stderr
+        (line,) = refused.stderr.splitlines()
+        assert "is a URL;" in line and "takes a local path" in line, line
+    assert not (tmp_path / "s3:").exists()
+
+
+def test_without_fsspec_every_url_is_one_line_with_the_install_hint(tmp_path):
+    """fsspec made unimportable for real (a package on PYTHONPATH whose import fails): a
+    URL anywhere is one line saying how to install it, exit 2; local runs still work."""
+    blocker = tmp_path / "blocker" / "fsspec"
+    blocker.mkdir(parents=True)
+    (blocker / "__init__.py").write_text(
+        "raise ModuleNotFoundError(\"No module named 'fsspec'\", name='fsspec')\n")
+    environment = {"PYTHONPATH": str(blocker.parent)}
+    door = str(SAMPLES / "door_p8_t-2_f1500.jpg")
+    for args in (["rectify", door, *DOOR_POSE, "-o", "memory://out/"],
+                 ["rectify", door, *DOOR_POSE, "-o", "o", "--table", "memory://t.csv"],
+                 ["rectify", "s3://b/in/", *DOOR_POSE, "-o", "o"],
+                 ["estimate", "s3://b/in/x.jpg"],
+                 ["params", "--sidecar", "s3://b/v.csv"],
+                 ["lines", "s3://b/in/x.jpg"],
+                 ["tables", "merge", "memory://a.csv", "-o", "m.csv"]):
+        result = run(environment, *args, cwd=tmp_path)
+        assert result.returncode == 2, (args, result.stderr)
+        (line,) = result.stderr.splitlines()
+        assert line.startswith("Error: ") and "internal error" not in line, line
+        assert line.endswith("install it with pip install 'gsrwt[dask]')"), line
+    assert not (tmp_path / "o").exists() or not any((tmp_path / "o").iterdir())
+    local = run(environment, "rectify", door, *DOOR_POSE, "-o", "o", cwd=tmp_path)
+    assert local.returncode == 0, local.stderr
+
+
+# --------------------------------------------------------------------------------------------
 # The storage layer itself, on fsspec's in-memory file system
 # --------------------------------------------------------------------------------------------
 

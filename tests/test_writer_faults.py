@@ -326,6 +326,49 @@ def test_draw_never_overwrites_an_input(tmp_path):
 
 
 # --------------------------------------------------------------------------------------------
+# A file written at the end of the work (a table, a sidecar) that is a directory
+# --------------------------------------------------------------------------------------------
+
+DOOR = str(VIEWS / "door_p8_t-2_f1500.jpg")
+DOOR_POSE = ("--pan", "8", "--tilt", "-2", "--focal", "1500")
+#: Each command that writes a file when its work is done, with that file a directory
+#: already: (the directory, the command, the directory that must hold no work after it).
+DIRECTORY_TARGETS = {
+    "rectify-default-table": ("out/gsrwt.csv", ["rectify", DOOR, *DOOR_POSE, "-o", "out"],
+                              "out"),
+    "rectify-table": ("t.json", ["rectify", DOOR, *DOOR_POSE, "-o", "out", "--table",
+                                 "t.json"], "out"),
+    "rectify-shard-table": ("out/gsrwt.1-of-2.csv", [
+        "rectify", str(VIEWS), "--sidecar", str(VIEWS / "views.csv"), "-o", "out", "--shard",
+        "1/2"], "out"),
+    "estimate": ("e.csv", ["estimate", DOOR, "--focal", "1500", "-o", "e.csv", "--draw",
+                           "out"], "out"),
+    "render-sidecar": ("out/views.csv", ["render", str(ROOT / "sample_data" / "corridor_wall.png"),
+                                         "--sidecar", str(VIEWS / "views.csv"), "-o", "out",
+                                         "--overwrite"], "out"),
+    "render-one-view-sidecar": ("out/v.yaml", [
+        "render", str(ROOT / "sample_data" / "corridor_wall.png"), *DOOR_POSE, "--width",
+        "64", "--height", "48", "-o", "out/v.png", "--overwrite"], "out"),
+    "tables-merge": ("m.csv", ["tables", "merge", "a.csv", "-o", "m.csv"], "out"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(DIRECTORY_TARGETS))
+def test_a_table_that_is_a_directory_is_refused_before_any_work(tmp_path, case):
+    """A table, shard table or sidecar to be written at the end whose name is a directory:
+    one line naming it, exit 2, and no work done (no image written, nothing drawn)."""
+    directory, args, work = DIRECTORY_TARGETS[case]
+    (tmp_path / "a.csv").write_text("image,status\nx.jpg,ok\n")
+    (tmp_path / directory).mkdir(parents=True)
+    result = run_gsrwt(*args, cwd=tmp_path)
+    assert result.returncode == 2, result.stderr
+    (line,) = assert_clean_stderr(result.stderr, error_lines=1)
+    assert f"{directory}: is a directory" in line, line
+    left = sorted(str(path.relative_to(tmp_path)) for path in (tmp_path / work).rglob("*"))
+    assert left == ([directory] if directory.startswith(f"{work}/") else []), left
+
+
+# --------------------------------------------------------------------------------------------
 # A reader that closes the pipe
 # --------------------------------------------------------------------------------------------
 

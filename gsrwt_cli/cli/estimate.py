@@ -16,14 +16,18 @@ from ..estimation import ESTIMATE_COLUMNS, EstimateJob, EstimateOptions, run_est
 from ..messages import one_line
 from ..records import load_camera_file
 from ..sidecar import SidecarError, display_path
+from ..storage import location
 from ..tables import FORMATS, TableWriter, format_from_extension
 from ..targets import Drawings
 from .options import (
     VIEW_OPTIONS,
     InputError,
+    LocalPath,
+    PathOrUrl,
     field_options,
     load_sidecar_option,
     make_output_directory,
+    prepare_table,
     report_error,
     resolve_format,
     view_defaults,
@@ -34,6 +38,7 @@ from .rectify import (
     end_batch,
     open_table,
     parse_pixel_count,
+    real,
     stop_on_signals,
 )
 
@@ -62,7 +67,7 @@ camera_options = field_options(
               help="Table format [default: from -o's extension; on stdout table on a "
                    "terminal, csv in a pipe].")
 @click.option("-r", "--recursive", is_flag=True, help="Descend into directories.")
-@click.option("--sidecar", type=click.Path(path_type=Path, dir_okay=False),
+@click.option("--sidecar", type=PathOrUrl(dir_okay=False),
               help="CSV or YAML of per-image intrinsics (focal, cx, cy, camera, lens); any "
                    "pose in it is ignored.")
 @camera_options
@@ -71,7 +76,7 @@ camera_options = field_options(
 @click.option("--wall", type=click.Choice(WALL_CHOICES), default="frontal", show_default=True,
               help="Which vertical plane is the wall: the most frontal (|pan| <= 45) or the "
                    "one with the most horizontal edges.")
-@click.option("--draw", type=click.Path(path_type=Path, file_okay=False),
+@click.option("--draw", type=LocalPath(file_okay=False),
               help="Write a picture per image (DIR/NAME.png): segments by direction, the "
                    "horizon, the frontal view's outline.")
 @click.option("--max-input-pixels", default="300M", show_default=True,
@@ -112,11 +117,12 @@ def estimate(inputs: tuple[str, ...], output: str | None, fmt: str | None, recur
     sources, unreadable = collect_sources(inputs, recursive)
     if not sources and not unreadable:
         raise InputError(f"no images found in {' '.join(inputs)}")
-    given = {os.path.realpath(source.path) for source in sources}
+    given = {real(source.path) for source in sources}
     if sidecar is not None:
-        given.add(os.path.realpath(sidecar))
-    if output != "-" and os.path.realpath(output) in given:
+        given.add(real(sidecar))
+    if output != "-" and real(location(output)) in given:
         raise InputError(f"-o {output}: would overwrite an input; choose another path")
+    prepare_table(output, "-o")
     drawings = None
     if draw is not None:
         make_output_directory("--draw", draw)

@@ -33,10 +33,12 @@ from ..landmarks.hough import DEFAULT_MAX_GAP, DEFAULT_MIN_LENGTH, ORIENTATIONS
 from ..messages import quote
 from ..report import LINES_COLUMNS, MATCH_COLUMNS, line_row, match_row
 from ..sources import sources_from_directory
+from ..storage import Location
 from ..tables import TableWriter
 from ..targets import Drawings
 from .options import (
     InputError,
+    PathOrUrl,
     draw_option,
     edge_threshold_option,
     format_option,
@@ -51,11 +53,16 @@ from .options import (
 )
 
 
-def _image_paths(images: tuple[Path, ...]) -> list[Path]:
-    """The image files given and the images in the directories given (checked up front)."""
-    paths: list[Path] = []
+def _image_paths(images: tuple[Path | Location, ...]) -> list[Path | Location]:
+    """The image files given and the images in the directories given (checked up front);
+    URLs as ``gsrwt rectify`` takes them (an object, or the images below a prefix)."""
+    paths: list[Path | Location] = []
     for path in images:
-        if path.is_dir():
+        if isinstance(path, Location):
+            from .rectify import sources_at_url
+
+            paths += [source.path for source in sources_at_url(str(path), path, False)]
+        elif path.is_dir():
             paths += [source.path for source in sources_from_directory(path, recursive=False)]
         elif path.is_file():
             paths.append(path)
@@ -210,7 +217,7 @@ def _parse_scales(text: str, steps: int) -> list[float]:
 @click.command()
 @images_argument
 @click.option("--template", "templates", multiple=True, required=True,
-              type=click.Path(path_type=Path, dir_okay=False),
+              type=PathOrUrl(dir_okay=False),
               help="A frontal image of the object (its bounding box); repeatable.")
 @raw_views_sidecar_option
 @view_options

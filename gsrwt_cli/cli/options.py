@@ -6,7 +6,9 @@ interpolation flags, the edge stage) is imported by that option, when a command 
 
 from __future__ import annotations
 
+import os
 import sys
+import tempfile
 from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, TypeVar
@@ -52,6 +54,22 @@ class InputError(click.ClickException):
         super().__init__(one_line(message))
 
 
+class LocalPath(click.Path):
+    """A local path (``click.Path``) for an option that takes no URL: a URL (``s3://``) is
+    refused in one line rather than taken for a local name (``s3:/bucket``)."""
+
+    def __init__(self, **kwargs: Any) -> None:
+        super().__init__(path_type=Path, **kwargs)
+
+    def convert(self, value: Any, param: click.Parameter | None,
+                ctx: click.Context | None) -> Any:
+        found = location(value) if isinstance(value, str) else value
+        if isinstance(found, Location):
+            option = max(param.opts, key=len) if param is not None and param.opts else ""
+            raise InputError(f"{option} {value}: is a URL; {option} takes a local path")
+        return super().convert(str(found), param, ctx)
+
+
 def report_error(message: str) -> None:
     """One ``Error: ...`` line on stderr: control characters escaped, length bounded."""
     click.echo("Error: " + one_line(message), err=True)
@@ -78,6 +96,52 @@ def load_sidecar_option(sidecar: Path | None) -> Sidecar | None:
         return load_sidecar(sidecar)
     except SidecarError as error:
         raise InputError(str(error)) from None
+    except OSError as error:  # a store that cannot be reached (storage.StoreError)
+        raise InputError(f"{sidecar}: cannot read ({error.strerror or error})") from None
+
+
+def prepare_directory(directory: Path | Location, what: str) -> None:
+    """Make ``directory`` and prove it writable (a temporary file made and removed), or
+    raise InputError starting with ``what`` (the option and the name the user gave).
+
+    On an object store, a probe object is written and removed below the prefix
+    (:func:`~gsrwt_cli.storage.check_writable`): a missing bucket, refused credentials or an
+    unreachable endpoint are found here, before any work."""
+    if isinstance(directory, Location):
+        from ..storage import check_writable
+
+        try:
+            check_writable(directory)
+        except OSError as error:
+            raise InputError(f"{what}: cannot write there ({error.strerror or error})") from None
+        return
+    blocker = next((p for p in [directory, *directory.parents] if p.exists()), None)
+    if blocker is not None and not blocker.is_dir():
+        raise InputError(f"{what}: cannot write there ({blocker} is not a directory)")
+    try:
+        directory.mkdir(parents=True, exist_ok=True)
+        descriptor, probe = tempfile.mkstemp(
+            dir=directory, prefix=f".gsrwt-probe.gsrwt-{os.getpid()}-", suffix=".part"
+        )
+        os.close(descriptor)
+        os.unlink(probe)
+    except OSError as error:
+        reason = error.strerror or str(error)
+        raise InputError(f"{what}: cannot write there ({reason})") from None
+
+
+def prepare_table(name: str, option: str) -> None:
+    """Before any work, make sure the table (or another file written at the end of the
+    work) can be written at ``name`` (``-`` is standard output): not a directory, in a
+    directory that exists or can be made and is writable (:func:`prepare_directory`), or
+    below a prefix of a store that takes a write. Else an :class:`InputError` naming
+    ``option``."""
+    if name == "-":
+        return
+    table = location(name)
+    if isinstance(table, Path) and table.is_dir():
+        raise InputError(f"{option} {name}: is a directory; give the table's file name")
+    prepare_directory(table.parent, f"{option} {name}")
 
 
 def target_message(error: TargetError, option: str | None = None) -> str:
@@ -97,7 +161,7 @@ def target_message(error: TargetError, option: str | None = None) -> str:
     if isinstance(error, InputOverwriteError):
         return f"{where}: would overwrite an input; choose another output"
     if isinstance(error, DirectoryTargetError):
-        return f"{where}: is a directory; give an image file name"
+        return f"{where}: is a directory; give a file name"
     if isinstance(error, UncreatableDirectoryError):
         return f"{where}: cannot create it ({error.reason})"
     if isinstance(error, UnwritableFileError):
@@ -106,7 +170,8 @@ def target_message(error: TargetError, option: str | None = None) -> str:
 
 
 def make_output_directory(option: str, directory: Path) -> None:
-    """Create the output directory the user named, or stop with one line saying why not."""
+    """Create the output directory the user named and prove it writable, or stop with one
+    line saying why not."""
     from ..targets import TargetError
     from ..targets import make_output_directory as create_directory
 
@@ -114,6 +179,7 @@ def make_output_directory(option: str, directory: Path) -> None:
         create_directory(directory)
     except TargetError as error:
         raise InputError(target_message(error, option)) from None
+    prepare_directory(directory, f"{option} {directory}")
 
 
 def format_option(func: F) -> F:
@@ -199,21 +265,21 @@ def edge_threshold_option(func: F, default: float | None = None,
 
 
 def images_argument(func: F) -> F:
-    """``IMAGE...``: image files and directories of images (lines, match)."""
-    return click.argument("images", nargs=-1, required=True, type=click.Path(path_type=Path),
+    """``IMAGE...``: image files and directories of images, paths or URLs (lines, match)."""
+    return click.argument("images", nargs=-1, required=True, type=PathOrUrl(),
                           metavar="IMAGE...")(func)
 
 
 def draw_option(what: str) -> Callable[[F], F]:
     """``--draw DIR`` of the landmark commands: the frontal views with ``what`` drawn in."""
-    return click.option("--draw", type=click.Path(path_type=Path, file_okay=False),
+    return click.option("--draw", type=LocalPath(file_okay=False),
                         help=f"Write the frontal views with the {what} drawn into this "
                              "directory.")
 
 
 def raw_views_sidecar_option(func: F) -> F:
     """``--sidecar`` of the landmark commands: parameters of views to rectify first."""
-    return click.option("--sidecar", type=click.Path(path_type=Path, dir_okay=False),
+    return click.option("--sidecar", type=PathOrUrl(dir_okay=False),
                         help="Parameters of raw views (as for rectify); images without are "
                              "taken as frontal already.")(func)
 

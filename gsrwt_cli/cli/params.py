@@ -11,6 +11,7 @@ import click
 
 from .options import (
     InputError,
+    PathOrUrl,
     format_option,
     report_error,
     resolve_format,
@@ -24,8 +25,9 @@ from .options import (
 @view_options
 @click.option(
     "--sidecar",
-    type=click.Path(path_type=Path, dir_okay=False),
-    help="CSV or YAML of views, one row per image; options above fill fields it leaves out.",
+    type=PathOrUrl(dir_okay=False),
+    help="CSV or YAML of views, one row per image (a path or a URL); options above fill "
+         "fields it leaves out.",
 )
 @format_option
 def params(sidecar: Path | None, fmt: str | None, **kwargs: Any) -> None:

@@ -14,7 +14,6 @@ import math
 import os
 import signal
 import sys
-import tempfile
 import threading
 from collections.abc import Iterator
 from pathlib import Path, PurePosixPath
@@ -68,7 +67,15 @@ from ..tables import (
     shard_slice,
     shard_table_name,
 )
-from .options import InputError, PathOrUrl, load_sidecar_option, view_defaults, view_options
+from .options import (
+    InputError,
+    PathOrUrl,
+    load_sidecar_option,
+    prepare_directory,
+    prepare_table,
+    view_defaults,
+    view_options,
+)
 
 
 def parse_bbox(text: str) -> str | tuple[float, float, float, float]:
@@ -162,7 +169,8 @@ def sources_at_url(text: str, url: Location, recursive: bool) -> list[Source]:
             return [Source(url, PurePosixPath(url.name))]
         found = sources_from_location(url, recursive)
     except (OSError, ValueError) as error:
-        raise InputError(f"{text}: cannot read ({one_line(str(error), 200)})") from None
+        reason = error.strerror if isinstance(error, OSError) and error.strerror else error
+        raise InputError(f"{text}: cannot read ({one_line(str(reason), 200)})") from None
     if not found and not url.exists():
         raise InputError(f"{text}: no such file or directory")
     return found
@@ -206,27 +214,6 @@ def refuse_unsafe_outputs(
         protected = given | ({real(sidecar)} if sidecar else set())
         if real(table) in protected:
             raise InputError(f"--table {table}: would overwrite an input; choose another path")
-
-
-def prepare_directory(directory: Path | Location, what: str) -> None:
-    """Make ``directory`` and prove it writable (a temporary file), or raise InputError.
-
-    An object store has no directories to make: its first write says whether it can."""
-    if isinstance(directory, Location):
-        return
-    blocker = next((p for p in [directory, *directory.parents] if p.exists()), None)
-    if blocker is not None and not blocker.is_dir():
-        raise InputError(f"{what}: cannot write there ({blocker} is not a directory)")
-    try:
-        directory.mkdir(parents=True, exist_ok=True)
-        descriptor, probe = tempfile.mkstemp(
-            dir=directory, prefix=f".gsrwt-probe.gsrwt-{os.getpid()}-", suffix=".part"
-        )
-        os.close(descriptor)
-        os.unlink(probe)
-    except OSError as error:
-        reason = error.strerror or str(error)
-        raise InputError(f"{what}: cannot write there ({reason})") from None
 
 
 def previous_rows(path: str, fmt: str) -> dict[tuple[str, str], dict[str, Any]]:
@@ -521,6 +508,13 @@ def rectify(
     sources, unreadable = collect_sources(inputs, recursive)
     if not sources and not unreadable:
         raise InputError(f"no images found in {' '.join(inputs)}")
+    if isinstance(outdir, Location):  # a store is asked before its listing plans the jobs
+        if not dry_run:
+            prepare_directory(outdir, f"-o {outdir}")
+        try:
+            outdir.exists()
+        except OSError as error:
+            raise InputError(f"-o {outdir}: cannot read ({error.strerror or error})") from None
     estimating = EstimateOptions(min_confidence, wall, input_pixel_limit) if auto else None
     job_list = plan_jobs(sources, outdir, loaded, view_defaults(view_kwargs), extension,
                          estimating)
@@ -537,8 +531,7 @@ def rectify(
     )
     if not dry_run:
         prepare_directory(outdir, f"-o {outdir}")
-    if table_path != "-":
-        prepare_directory(location(table_path).parent, f"--table {table_path}")
+    prepare_table(table_path, "--table")
     if shard_k_n is not None:  # the whole list is planned and checked, one slice is run
         job_list = [job_list[index] for index in shard_slice(len(job_list), *shard_k_n)]
     names = None

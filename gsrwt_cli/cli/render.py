@@ -15,6 +15,8 @@ from ..sidecar import SidecarError, load_sidecar
 from ..targets import NotADirectoryTargetError, TargetError, UncreatableDirectoryError
 from .options import (
     InputError,
+    LocalPath,
+    PathOrUrl,
     interpolation_option,
     option_message,
     quality_option,
@@ -26,13 +28,13 @@ from .options import (
 
 
 @click.command()
-@click.argument("texture", type=click.Path(path_type=Path, dir_okay=False))
+@click.argument("texture", type=PathOrUrl(dir_okay=False))
 @view_options
-@click.option("--sidecar", type=click.Path(path_type=Path, dir_okay=False),
+@click.option("--sidecar", type=PathOrUrl(dir_okay=False),
               help="CSV or YAML of views to render, one per row (image = output name).")
-@click.option("-o", "--output", "output", required=True, type=click.Path(path_type=Path),
+@click.option("-o", "--output", "output", required=True, type=LocalPath(),
               help="Output image (one view), or directory (with --sidecar).")
-@click.option("--out-sidecar", type=click.Path(path_type=Path, dir_okay=False),
+@click.option("--out-sidecar", type=LocalPath(dir_okay=False),
               help="Where to write the views' sidecar (.csv or .yaml) [default: OUTPUT's "
                    "NAME.yaml for one view, OUTPUT/views.csv with --sidecar].")
 @interpolation_option

@@ -14,7 +14,7 @@ from ..messages import quote
 from ..outputs import open_atomic
 from ..storage import Location, location
 from ..tables import MergeError, format_from_extension, merge_tables, order_shards
-from .options import InputError
+from .options import InputError, prepare_table
 
 MACHINE_FORMATS = ("csv", "tsv", "json", "jsonl")
 
@@ -89,6 +89,7 @@ def merge(shard_tables: tuple[str, ...], output: str, quiet: bool) -> None:
         raise InputError(str(error)) from None
     if output != "-" and output in ordered:
         raise InputError(f"-o {output}: is one of the tables to merge; choose another path")
+    prepare_table(output, "-o")
     with contextlib.ExitStack() as stack:
         streams = []
         for name in ordered:
