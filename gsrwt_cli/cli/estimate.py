@@ -19,8 +19,11 @@ from ..sidecar import SidecarError, display_path
 from ..tables import FORMATS, TableWriter, format_from_extension
 from ..targets import Drawings
 from .options import (
+    MAX_JOBS,
     VIEW_OPTIONS,
     InputError,
+    Integer,
+    Number,
     field_options,
     load_sidecar_option,
     make_output_directory,
@@ -66,7 +69,7 @@ camera_options = field_options(
               help="CSV or YAML of per-image intrinsics (focal, cx, cy, camera, lens); any "
                    "pose in it is ignored.")
 @camera_options
-@click.option("--min-confidence", type=click.FloatRange(0, 1), default=0.0, show_default=True,
+@click.option("--min-confidence", type=Number(0, 1), default=0.0, show_default=True,
               help="Estimates less confident than this (0-1) are errors.")
 @click.option("--wall", type=click.Choice(WALL_CHOICES), default="frontal", show_default=True,
               help="Which vertical plane is the wall: the most frontal (|pan| <= 45) or the "
@@ -76,7 +79,7 @@ camera_options = field_options(
                    "horizon, the frontal view's outline.")
 @click.option("--max-input-pixels", default="300M", show_default=True,
               help="Refuse, before decoding it, an input whose header claims more pixels.")
-@click.option("-j", "--jobs", type=click.IntRange(min=1), default=None,
+@click.option("-j", "--jobs", type=Integer(1, MAX_JOBS), default=None,
               help="Worker processes [default: all cores].")
 @click.option("-q", "--quiet", is_flag=True, help="No summary on stderr.")
 def estimate(inputs: tuple[str, ...], output: str | None, fmt: str | None, recursive: bool,

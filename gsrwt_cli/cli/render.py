@@ -15,6 +15,7 @@ from ..sidecar import SidecarError, load_sidecar
 from ..targets import NotADirectoryTargetError, TargetError, UncreatableDirectoryError
 from .options import (
     InputError,
+    Number,
     interpolation_option,
     option_message,
     quality_option,
@@ -36,7 +37,7 @@ from .options import (
               help="Where to write the views' sidecar (.csv or .yaml) [default: OUTPUT's "
                    "NAME.yaml for one view, OUTPUT/views.csv with --sidecar].")
 @interpolation_option
-@click.option("--fill", type=float, default=0.0, show_default=True,
+@click.option("--fill", type=Number(), default=0.0, show_default=True,
               help="Value of pixels that see no texture.")
 @click.option("--alpha", is_flag=True, help="Make pixels that see no texture transparent.")
 @quality_option
