@@ -157,7 +157,9 @@ def full_frame(
     reference = local_stretch(homography, np.array([[view.cx, view.cy]]))[0]
     keep = visible[local_stretch(homography, visible) <= max_stretch * reference]
     if len(keep) == 0:
-        raise NothingWithinStretchError(max_stretch)
+        raise NothingWithinStretchError(max_stretch, NothingWithinStretchError.OVER_STRETCHED
+                                        if len(visible) else
+                                        NothingWithinStretchError.BEYOND_HORIZON)
     mapped = map_points(homography, keep)
     low = np.floor(mapped.min(axis=0) + 0.5)
     high = np.ceil(mapped.max(axis=0) + 0.5)
@@ -199,7 +201,7 @@ def crop_frame(
     valid = corners[:-1, :-1] & corners[1:, :-1] & corners[:-1, 1:] & corners[1:, 1:]
     top, bottom, left, right = _largest_rectangle(valid)
     if bottom <= top:
-        raise NothingWithinStretchError(max_stretch)
+        raise NothingWithinStretchError(max_stretch, NothingWithinStretchError.NO_RECTANGLE)
     cell_x, cell_y = (full.x1 - full.x0) / cells, (full.y1 - full.y0) / cells
     return Frame(full.x0 + left * cell_x, full.y0 + top * cell_y, full.x0 + right * cell_x,
                  full.y0 + bottom * cell_y, scale)
@@ -237,15 +239,31 @@ class OutputTooLargeError(ValueError):
         )
 
 
-class NothingWithinStretchError(ValueError):
-    """No input pixel is magnified at most ``max_stretch`` times (:func:`full_frame`)."""
+class EmptyOutputError(ValueError):
+    """The output frame is less than a pixel across: ``width x height`` has a 0."""
 
-    def __init__(self, max_stretch: float) -> None:
-        self.max_stretch = max_stretch
-        super().__init__(
-            f"no part of the image is within a stretch of {max_stretch:g} (the vanishing line "
-            "covers it)"
-        )
+    def __init__(self, width: int, height: int) -> None:
+        self.width, self.height = width, height
+        super().__init__(f"the output would be empty ({width}x{height} pixels)")
+
+
+class NothingWithinStretchError(ValueError):
+    """Nothing to frame within ``max_stretch`` (:func:`full_frame`, :func:`crop_frame`), for
+    ``reason``: one of :data:`BEYOND_HORIZON` (no pixel is in front of the vanishing line),
+    :data:`OVER_STRETCHED` (every pixel in front of it is magnified more than ``max_stretch``
+    times as much as the principal point: a frontal view, magnified alike everywhere, when
+    ``max_stretch`` is below 1) or :data:`NO_RECTANGLE` (what is within it holds no
+    rectangle without fill)."""
+
+    BEYOND_HORIZON = "the vanishing line covers it"
+    OVER_STRETCHED = ("every visible pixel is magnified more than {max_stretch:g} times as much "
+                      "as the principal point")
+    NO_RECTANGLE = "what is within it holds no rectangle without fill"
+
+    def __init__(self, max_stretch: float, reason: str) -> None:
+        self.max_stretch, self.reason = max_stretch, reason
+        super().__init__(f"no part of the image is within a stretch of {max_stretch:g} "
+                         f"({reason.format(max_stretch=max_stretch)})")
 
 
 class BeyondLensLimitError(ValueError):
@@ -317,8 +335,8 @@ def plan_output(
     (:func:`crop_frame`) or an explicit
     ``(x0, y0, x1, y1)`` in default-frame pixel edges. ``max_size``: ``(width, height)`` the
     output must fit in; a larger frame is kept but its ``scale`` lowered until it fits.
-    Raises ``ValueError`` for an empty output, :class:`OutputTooLargeError` for one larger
-    than ``max_pixels``.
+    Raises :class:`EmptyOutputError` for an empty output, :class:`OutputTooLargeError` for one
+    larger than ``max_pixels``, :class:`NothingWithinStretchError` for nothing to frame.
     """
     if view.width is None or view.height is None:
         raise ValueError("the image size is needed to frame the output")
@@ -351,7 +369,7 @@ def _plan_output(
         frame = fit_frame(frame, max_size)
     width, height = frame.size
     if width < 1 or height < 1:
-        raise ValueError(f"the output would be empty ({width}x{height} pixels)")
+        raise EmptyOutputError(width, height)
     if width * height > max_pixels:
         raise OutputTooLargeError(width, height, max_pixels)
     homography = frame.output_from_default() @ output_from_input(view)

@@ -70,14 +70,19 @@ class Found:
 
 @dataclass(frozen=True)
 class NotFound:
-    """No source has the image; ``looked`` lists each place, e.g. ``not in views.csv``."""
+    """No source has the image; ``looked`` lists each place, e.g. ``not in views.csv``;
+    ``sidecar`` names the sidecar looked in, if there was one."""
 
     looked: tuple[str, ...]
+    sidecar: str | None = None
 
     @property
     def message(self) -> str:
-        """``no parameters: not in views.csv, no a.yaml beside it, no --pan/--tilt/--focal``."""
-        return "no parameters: " + ", ".join(self.looked)
+        """``no parameters: not in views.csv, no a.yaml beside it, no --pan/--tilt; add it to
+        views.csv, or estimate the pose with --auto``."""
+        remedy = f"add it to {self.sidecar}" if self.sidecar else "give them in a --sidecar"
+        return (f"no parameters: {', '.join(self.looked)}; {remedy}, or estimate the pose "
+                "with --auto")
 
 
 @dataclass(frozen=True)
@@ -142,11 +147,12 @@ def _resolve(image: Path, relative: PurePosixPath | str, sidecar: Sidecar | None
     if set(REQUIRED_OPTIONS) <= set(fallback):
         return Found(fallback, "options", Origin.OPTIONS)
     looked = []
-    if sidecar is not None:
-        looked.append(f"not in {display_path(sidecar.path)}")
+    named = None if sidecar is None else display_path(sidecar.path)
+    if named is not None:
+        looked.append(f"not in {named}")
     looked.append(f"no {display_path(image.stem)}.yaml beside it")
     looked.append("no " + "/".join(f"--{name}" for name in REQUIRED_OPTIONS))
-    return NotFound(tuple(looked))
+    return NotFound(tuple(looked), named)
 
 
 def _from_adjacent_yaml(image: Path, beside: Path, fallback: dict[str, Any]) -> Parameters:

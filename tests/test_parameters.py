@@ -95,9 +95,12 @@ def test_nothing_found_lists_the_places_looked(tmp_path):
     missing = resolve(photo, load_sidecar(sidecar_path), {"pan": 1.0, "focal": 2.0})
     assert isinstance(missing, NotFound)
     assert missing.message == (
-        f"no parameters: not in {sidecar_path}, no a.yaml beside it, no --pan/--tilt"
+        f"no parameters: not in {sidecar_path}, no a.yaml beside it, no --pan/--tilt; add it "
+        f"to {sidecar_path}, or estimate the pose with --auto"
     )
-    assert resolve(photo).message == "no parameters: no a.yaml beside it, no --pan/--tilt"
+    assert resolve(photo).message == (
+        "no parameters: no a.yaml beside it, no --pan/--tilt; give them in a --sidecar, or "
+        "estimate the pose with --auto")
 
 
 @pytest.mark.parametrize(
@@ -170,7 +173,8 @@ def test_plan_jobs_takes_each_kind_of_result(tmp_path):
     assert jobs[1].error == (
         f"{folder / 'bad.yaml'} line 4: key 'focal' given twice (first on line 3)"
     )
-    assert jobs[2].error == "no parameters: no none.yaml beside it, no --pan/--tilt"
+    assert jobs[2].error == ("no parameters: no none.yaml beside it, no --pan/--tilt; give them "
+                             "in a --sidecar, or estimate the pose with --auto")
 
 
 def test_canonical_views_take_each_kind_of_result(tmp_path):

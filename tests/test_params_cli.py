@@ -221,8 +221,11 @@ def test_bad_sidecar_files(tmp_path, gsrwt, name, content, message):
         (["--pan", "15", "--tilt", "30"], "Error: missing option --focal"),
         (["--pan", "15", "--tilt", "95", "--focal", "280"], "Error: option --tilt: tilt must"),
         (["--pan", "15", "--tilt", "30", "--focal", "-3"], "Error: option --focal: focal must"),
-        (["--pan", "nan", "--tilt", "30", "--focal", "280"], "Error: option --pan: must be finite"),
-        (["--pan", "x", "--tilt", "30", "--focal", "280"], "'x' is not a valid float"),
+        (["--pan", "nan", "--tilt", "30", "--focal", "280"],
+         "Error: Invalid value for '--pan': must be finite, got 'nan'"),
+        (["--pan", "x", "--tilt", "30", "--focal", "280"],
+         "Error: Invalid value for '--pan': expected a finite decimal number in ASCII digits, "
+         "such as -2.5 or 1e3, got 'x'"),
         (["--pan", "1", "--tilt", "30", "--focal", "280", "--cx", "3"], "cx and cy"),
     ],
 )

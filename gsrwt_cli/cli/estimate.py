@@ -20,9 +20,12 @@ from ..storage import location
 from ..tables import FORMATS, TableWriter, format_from_extension
 from ..targets import Drawings
 from .options import (
+    MAX_JOBS,
     VIEW_OPTIONS,
     InputError,
+    Integer,
     LocalPath,
+    Number,
     PathOrUrl,
     field_options,
     load_sidecar_option,
@@ -71,7 +74,7 @@ camera_options = field_options(
               help="CSV or YAML of per-image intrinsics (focal, cx, cy, camera, lens); any "
                    "pose in it is ignored.")
 @camera_options
-@click.option("--min-confidence", type=click.FloatRange(0, 1), default=0.0, show_default=True,
+@click.option("--min-confidence", type=Number(0, 1), default=0.0, show_default=True,
               help="Estimates less confident than this (0-1) are errors.")
 @click.option("--wall", type=click.Choice(WALL_CHOICES), default="frontal", show_default=True,
               help="Which vertical plane is the wall: the most frontal (|pan| <= 45) or the "
@@ -81,7 +84,7 @@ camera_options = field_options(
                    "horizon, the frontal view's outline.")
 @click.option("--max-input-pixels", default="300M", show_default=True,
               help="Refuse, before decoding it, an input whose header claims more pixels.")
-@click.option("-j", "--jobs", type=click.IntRange(min=1), default=None,
+@click.option("-j", "--jobs", type=Integer(1, MAX_JOBS), default=None,
               help="Worker processes [default: all cores].")
 @click.option("-q", "--quiet", is_flag=True, help="No summary on stderr.")
 def estimate(inputs: tuple[str, ...], output: str | None, fmt: str | None, recursive: bool,

@@ -10,10 +10,12 @@ import click
 
 from ..gaze import GazeTargetError, gaze_at, track_steps
 from ..messages import quote
+from ..numerals import parse_decimal
 from ..report import GAZE_COLUMNS, TRACK_COLUMNS
 from ..tables import write_table
 from .options import (
     InputError,
+    Number,
     format_option,
     resolve_format,
     view_defaults,
@@ -31,7 +33,7 @@ def _pair(name: str, text: str | None) -> tuple[float, float] | None:
     if text is None:
         return None
     try:
-        first, second = (float(part) for part in text.split(","))
+        first, second = (parse_decimal(part) for part in text.split(","))
     except ValueError:
         raise click.BadParameter(f"expected two numbers A,B, got {quote(text)}",
                                  param_hint=f"'{name}'") from None
@@ -64,17 +66,20 @@ def gaze(to_pixel: str | None, to_vector: str | None, fmt: str | None, **kwargs:
     try:
         row = asdict(gaze_at(view, pixel, vector))
     except GazeTargetError as error:
-        raise InputError(f"{TARGET_OPTIONS[error.target]} needs "
-                         f"{NEEDED_OPTIONS[error.target]}") from None
+        needed = NEEDED_OPTIONS[error.target]
+        half_size = [f"--{name}" for name in ("width", "height") if kwargs.get(name) is None]
+        if error.target == "pixel" and len(half_size) == 1:  # not the option already given
+            needed = f"{half_size[0]} too (the image size), or --cx --cy"
+        raise InputError(f"{TARGET_OPTIONS[error.target]} needs {needed}") from None
     write_table(sys.stdout, GAZE_COLUMNS, [row], resolve_format(fmt))
 
 
 @click.command()
-@click.option("--distance", type=float, required=True,
+@click.option("--distance", type=Number(), required=True,
               help="Distance from the robot's path to the wall.")
-@click.option("--height", type=float, default=0.0, show_default=True,
+@click.option("--height", type=Number(), default=0.0, show_default=True,
               help="Height of the object above the camera (same unit).")
-@click.option("--object", "object_position", type=float, required=True,
+@click.option("--object", "object_position", type=Number(), required=True,
               help="Position of the object along the wall (same unit).")
 @click.option("--positions", required=True, metavar="P1,P2,...",
               help="Robot positions along its path; the object is ahead by OBJECT - P.")
@@ -94,7 +99,7 @@ def track(distance: float, height: float, object_position: float, positions: str
     if not distance > 0:
         raise click.BadParameter(f"must be positive, got {distance:g}", param_hint="'--distance'")
     try:
-        points = [float(p) for p in positions.split(",") if p.strip()]
+        points = [parse_decimal(p.strip()) for p in positions.split(",") if p.strip()]
     except ValueError:
         raise click.BadParameter(f"expected numbers separated by commas, got {quote(positions)}",
                                  param_hint="'--positions'") from None

@@ -31,6 +31,7 @@ from ..landmarks.frontal import frontal_edges
 from ..landmarks.ght import DEFAULT_MATCH_THRESHOLD
 from ..landmarks.hough import DEFAULT_MAX_GAP, DEFAULT_MIN_LENGTH, ORIENTATIONS
 from ..messages import quote
+from ..numerals import parse_decimal
 from ..report import LINES_COLUMNS, MATCH_COLUMNS, line_row, match_row
 from ..sources import sources_from_directory
 from ..storage import Location
@@ -38,6 +39,8 @@ from ..tables import TableWriter
 from ..targets import Drawings
 from .options import (
     InputError,
+    Integer,
+    Number,
     PathOrUrl,
     draw_option,
     edge_threshold_option,
@@ -144,15 +147,15 @@ def _min_length_px(view: CanonicalView, pixels: float, units: float | None) -> f
                    text="High hysteresis threshold: gradient magnitude (3x3 Sobel of the "
                         "smoothed view, x magnification) a chain of edge pixels needs; "
                         "it keeps pixels down to 0.4 of it.")
-@click.option("--theta-step", type=float, default=DEFAULT_THETA_STEP_DEG, show_default=True,
+@click.option("--theta-step", type=Number(), default=DEFAULT_THETA_STEP_DEG, show_default=True,
               help="Orientation sampling, degrees.")
-@click.option("--min-votes", type=click.IntRange(min=1), default=DEFAULT_MIN_VOTES,
+@click.option("--min-votes", type=Integer(min=1), default=DEFAULT_MIN_VOTES,
               show_default=True, help="Votes a Hough cell needs to be a candidate line.")
-@click.option("--max-gap", type=click.FloatRange(min=0), default=DEFAULT_MAX_GAP,
+@click.option("--max-gap", type=Number(min=0), default=DEFAULT_MAX_GAP,
               show_default=True, help="Longest gap inside a segment, frontal pixels.")
-@click.option("--min-length", type=click.FloatRange(min=0), default=DEFAULT_MIN_LENGTH,
+@click.option("--min-length", type=Number(min=0), default=DEFAULT_MIN_LENGTH,
               show_default=True, help="Shortest segment reported, frontal pixels.")
-@click.option("--min-length-units", type=click.FloatRange(min=0), default=None,
+@click.option("--min-length-units", type=Number(min=0), default=None,
               help="Shortest segment in wall units (needs the distance); instead of "
                    "--min-length.")
 @click.option("--orientation", type=click.Choice(ORIENTATIONS), default="all",
@@ -204,7 +207,7 @@ def lines(images: tuple[Path, ...], sidecar: Path | None, edge_threshold: float,
 
 def _parse_scales(text: str, steps: int) -> list[float]:
     try:
-        low, high = (float(v) for v in text.split(","))
+        low, high = (parse_decimal(v) for v in text.split(","))
     except ValueError:
         raise click.BadParameter(f"expected MIN,MAX, got {quote(text)}",
                                  param_hint="'--scales'") from None
@@ -224,10 +227,10 @@ def _parse_scales(text: str, steps: int) -> list[float]:
 @click.option("--scales", default="0.9,1.1", show_default=True, metavar="MIN,MAX",
               help="Scale range to search around the expected scale 1 (the template at "
                    "frontal resolution).")
-@click.option("--scale-steps", type=click.IntRange(min=1), default=5, show_default=True)
-@click.option("--min-score", type=click.FloatRange(0, 1), default=0.6, show_default=True,
+@click.option("--scale-steps", type=Integer(min=1), default=5, show_default=True)
+@click.option("--min-score", type=Number(0, 1), default=0.6, show_default=True,
               help="Fraction of the model's edge pixels a match must find.")
-@click.option("--max-matches", type=click.IntRange(min=1), default=1, show_default=True,
+@click.option("--max-matches", type=Integer(min=1), default=1, show_default=True,
               help="Matches per image and template.")
 @functools.partial(edge_threshold_option, default=DEFAULT_MATCH_THRESHOLD,
                    text="High hysteresis threshold of the edges (as for gsrwt lines), in the "

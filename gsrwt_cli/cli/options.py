@@ -16,7 +16,8 @@ from typing import TYPE_CHECKING, Any, TypeVar
 import click
 
 from ..bounds import VIEW_FIELDS
-from ..messages import one_line
+from ..messages import one_line, quote
+from ..numerals import parse_decimal, parse_whole
 from ..storage import Location, location
 from ..tables import FORMATS
 
@@ -43,6 +44,52 @@ class PathOrUrl(click.Path):
         if isinstance(found, Location):
             return found
         return super().convert(str(found), param, ctx)
+
+
+#: ``-j``: worker processes at most (a bound, so that a typo is not a fork bomb).
+MAX_JOBS = 1024
+
+
+class Integer(click.IntRange):
+    """A whole-number option: ASCII digits (:func:`~gsrwt_cli.numerals.parse_whole`: no
+    ``+``, ``_``, space or other script's digits), within ``min`` and ``max`` if given."""
+
+    name = "integer"
+
+    def convert(self, value: Any, param: click.Parameter | None,
+                ctx: click.Context | None) -> Any:
+        if isinstance(value, str):
+            try:
+                value = parse_whole(value)
+            except ValueError as error:
+                self.fail(f"{error}, got {quote(value)}", param, ctx)
+        return super().convert(value, param, ctx)
+
+    def _describe_range(self) -> str:
+        return "" if self.min is None and self.max is None else super()._describe_range()
+
+
+class Number(click.FloatRange):
+    """A number option: a finite decimal in ASCII digits
+    (:func:`~gsrwt_cli.numerals.parse_decimal`), within ``min`` and ``max`` if given."""
+
+    name = "float"
+
+    def convert(self, value: Any, param: click.Parameter | None,
+                ctx: click.Context | None) -> Any:
+        if isinstance(value, str):
+            try:
+                value = parse_decimal(value)
+            except ValueError as error:
+                self.fail(f"{error}, got {quote(value)}", param, ctx)
+        return super().convert(value, param, ctx)
+
+    def _describe_range(self) -> str:
+        return "" if self.min is None and self.max is None else super()._describe_range()
+
+
+#: The option type of each kind of value of :data:`VIEW_OPTIONS`.
+OPTION_TYPES: dict[type, click.ParamType] = {float: Number(), int: Integer()}
 
 
 class InputError(click.ClickException):
@@ -224,7 +271,7 @@ def field_options(fields: dict[str, tuple[type, str]], camera_help: str) -> Call
     def decorate(func: F) -> F:
         for name in reversed(fields):
             kind, text = fields[name]
-            func = click.option(f"--{name}", type=kind, help=text)(func)
+            func = click.option(f"--{name}", type=OPTION_TYPES[kind], help=text)(func)
         return click.option("--camera", type=click.Path(dir_okay=False),
                             help=camera_help)(func)
     return decorate
@@ -248,7 +295,7 @@ def interpolation_option(func: F) -> F:
 
 def quality_option(func: F) -> F:
     """``--quality``: of JPEG and WebP outputs."""
-    return click.option("--quality", type=click.IntRange(1, 100), default=95, show_default=True,
+    return click.option("--quality", type=Integer(1, 100), default=95, show_default=True,
                         help="JPEG and WebP quality.")(func)
 
 
@@ -260,7 +307,7 @@ def edge_threshold_option(func: F, default: float | None = None,
         from ..landmarks import DEFAULT_EDGE_THRESHOLD
 
         default = DEFAULT_EDGE_THRESHOLD
-    return click.option("--edge-threshold", type=click.FloatRange(min=0, min_open=True),
+    return click.option("--edge-threshold", type=Number(min=0, min_open=True),
                         default=default, show_default=True, help=text)(func)
 
 

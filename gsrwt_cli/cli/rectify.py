@@ -16,6 +16,7 @@ import signal
 import sys
 import threading
 from collections.abc import Iterator
+from dataclasses import dataclass
 from pathlib import Path, PurePosixPath
 from types import FrameType
 from typing import IO, Any
@@ -40,7 +41,7 @@ from ..batch import (
 from ..calibration import CalibrationError
 from ..estimate import WALL_CHOICES
 from ..estimation import EstimateOptions
-from ..framing import NothingWithinStretchError, OutputTooLargeError
+from ..framing import EmptyOutputError, NothingWithinStretchError, OutputTooLargeError
 from ..imaging import (
     INTERPOLATIONS,
     ImageError,
@@ -49,6 +50,7 @@ from ..imaging import (
     check_writable,
 )
 from ..messages import one_line, quote
+from ..numerals import parse_decimal, parse_whole
 from ..outputs import open_atomic, remove_stale_temporaries
 from ..records import load_camera_file
 from ..rectify import MissingDistanceError
@@ -68,7 +70,10 @@ from ..tables import (
     shard_table_name,
 )
 from .options import (
+    MAX_JOBS,
     InputError,
+    Integer,
+    Number,
     PathOrUrl,
     load_sidecar_option,
     prepare_directory,
@@ -85,7 +90,7 @@ def parse_bbox(text: str) -> str | tuple[float, float, float, float]:
         return text
     parts = text.split(",")
     try:
-        box = tuple(float(p) for p in parts)
+        box = tuple(parse_decimal(p) for p in parts)
     except ValueError:
         box = ()
     if len(box) != 4 or not all(math.isfinite(v) for v in box):
@@ -100,11 +105,11 @@ def parse_bbox(text: str) -> str | tuple[float, float, float, float]:
 
 
 def parse_pixel_count(text: str, option: str) -> float:
-    """``50M``, ``2.5e6`` or ``800K`` pixels."""
+    """``50M``, ``2.5e6`` or ``800K`` pixels (ASCII digits)."""
     factor = {"k": 1e3, "m": 1e6, "g": 1e9}.get(text[-1:].lower(), 1.0)
     number = text[:-1] if factor != 1.0 else text
     try:
-        value = float(number) * factor
+        value = parse_decimal(number) * factor
     except ValueError:
         value = math.nan
     if not math.isfinite(value) or value < 1:
@@ -114,10 +119,10 @@ def parse_pixel_count(text: str, option: str) -> float:
 
 
 def parse_size(text: str) -> tuple[int, int]:
-    """``1920x1080``: a width and height of whole positive pixels."""
+    """``1920x1080``: a width and height of whole positive pixels (ASCII digits)."""
     parts = text.lower().split("x")
     try:
-        width, height = (int(part) for part in parts)
+        width, height = (parse_whole(part) for part in parts)
     except ValueError:
         width = height = 0
     if len(parts) != 2 or width < 1 or height < 1 or max(width, height) > 1 << 30:
@@ -234,27 +239,82 @@ def previous_rows(path: str, fmt: str) -> dict[tuple[str, str], dict[str, Any]]:
     }
 
 
-def describe_error(error: BaseException) -> str | None:
-    """A core error in terms of ``gsrwt rectify``'s options, or None for its own text."""
-    if isinstance(error, OutputTooLargeError):
-        pixels = error.width * error.height
-        return (
-            f"the output would be {error.width}x{error.height} = {pixels / 1e6:.1f} "
-            f"megapixels, above --max-pixels {error.limit / 1e6:g} megapixels; use --bbox "
-            "frontal, a smaller --scale, a lower --max-stretch or a higher --max-pixels"
-        )
-    if isinstance(error, NothingWithinStretchError):
-        return (
-            f"no part of the image is within --max-stretch {error.max_stretch:g} (the "
-            "vanishing line covers it); raise --max-stretch or use --bbox frontal"
-        )
-    if isinstance(error, MissingDistanceError):
-        return "--px-per-unit needs the camera-to-wall 'distance' of the image"
-    if isinstance(error, ImageFormatError):
-        if not error.alternatives:
-            return str(error)
-        return f"{error.reason}; use --ext {' or --ext '.join(error.alternatives)}"
-    return None
+def megapixels(pixels: int) -> str:
+    """A pixel count in megapixels, with the digits that show it (0.0075, 30.7)."""
+    value = pixels / 1e6
+    return f"{value:.1f}" if value >= 0.1 else f"{value:.2g}"
+
+
+def either(remedies: list[str]) -> str:
+    """``a, b or c``."""
+    return " or ".join(filter(None, [", ".join(remedies[:-1]), remedies[-1]]))
+
+
+@dataclass(frozen=True)
+class RectifyWording:
+    """Words the core's errors in terms of one ``gsrwt rectify`` run's options, naming only
+    remedies not already in use (an instance is :class:`~gsrwt_cli.batch.Settings`'s
+    ``describe``; it is pickled to the workers).
+
+    ``bbox``: frontal, full, crop, or box (X0,Y0,X1,Y1); ``metric``: the scale comes from
+    --px-per-unit; ``max_size``: --max-size is given.
+    """
+
+    bbox: str = "frontal"
+    metric: bool = False
+    max_size: bool = False
+
+    def __call__(self, error: BaseException) -> str | None:
+        """``error`` in the run's terms, or None for its own text."""
+        if isinstance(error, OutputTooLargeError):
+            return (f"the output would be {error.width}x{error.height} = "
+                    f"{megapixels(error.width * error.height)} megapixels, above --max-pixels "
+                    f"{error.limit / 1e6:g} megapixels; use {self._smaller_output()}")
+        if isinstance(error, EmptyOutputError):
+            return (f"the output would be empty ({error.width}x{error.height} pixels); use "
+                    f"{self._larger_output()}")
+        if isinstance(error, NothingWithinStretchError):
+            return self._nothing_within(error)
+        if isinstance(error, MissingDistanceError):
+            return ("--px-per-unit needs the camera-to-wall 'distance' of the image; give it "
+                    "(--distance or a 'distance' column) or use --scale")
+        if isinstance(error, ImageFormatError) and error.alternatives:
+            return f"{error.reason}; use --ext {' or --ext '.join(error.alternatives)}"
+        return None
+
+    def _smaller_output(self) -> str:
+        remedies = ["a smaller --max-size" if self.max_size else "--max-size WxH",
+                    "a smaller --px-per-unit" if self.metric else "a smaller --scale"]
+        if self.bbox in ("full", "crop"):
+            remedies += ["a lower --max-stretch", "--bbox frontal"]
+        elif self.bbox == "box":
+            remedies.append("a smaller --bbox")
+        return either([*remedies, "a higher --max-pixels"])
+
+    def _larger_output(self) -> str:
+        remedies = ["a larger --px-per-unit" if self.metric else "a larger --scale"]
+        if self.max_size:
+            remedies.append("a larger --max-size")
+        if self.bbox in ("full", "crop"):
+            remedies.append("a higher --max-stretch")
+        elif self.bbox == "box":
+            remedies.append("a larger --bbox")
+        return either(remedies)
+
+    @staticmethod
+    def _nothing_within(error: NothingWithinStretchError) -> str:
+        stretch = f"--max-stretch {error.max_stretch:g}"
+        if error.reason == NothingWithinStretchError.BEYOND_HORIZON:
+            return ("no part of the image is in front of the vanishing line; check the pose "
+                    "and the principal point")
+        if error.reason == NothingWithinStretchError.NO_RECTANGLE:
+            return (f"--bbox crop finds no rectangle without fill within {stretch}; raise "
+                    "--max-stretch, or use --bbox full")
+        below_one = (" (below 1, the principal point itself is beyond it)"
+                     if error.max_stretch < 1 else "")
+        return (f"no part of the image is within {stretch} (every visible pixel is magnified "
+                f"more than {error.max_stretch:g} times as much as the principal point); "
+                f"raise --max-stretch{below_one}, or use --bbox frontal")
 
 
 class TableWriteError(Exception):
@@ -382,12 +442,12 @@ def dask_executor(address: str, processes: int, retries: int,
               help="Output extent: frontal (the thesis's box, the input's size), full (the "
                    "visible wall, up to --max-stretch), crop (the largest rectangle of it with "
                    "no fill) or X0,Y0,X1,Y1 in default-frame pixels.")
-@click.option("--max-stretch", type=float, default=4.0, show_default=True,
+@click.option("--max-stretch", type=Number(), default=4.0, show_default=True,
               help="With --bbox full or crop: stop where the image is magnified more than "
                    "this many times the magnification at its centre.")
-@click.option("--scale", type=float, default=None,
+@click.option("--scale", type=Number(), default=None,
               help="Output pixels per frontal pixel [default: 1].")
-@click.option("--px-per-unit", type=float, default=None,
+@click.option("--px-per-unit", type=Number(), default=None,
               help="Metric output: pixels per unit of the image's 'distance'.")
 @click.option("--max-pixels", default="50M", show_default=True,
               help="Refuse an output image larger than this (e.g. 50M, 2e7).")
@@ -398,7 +458,7 @@ def dask_executor(address: str, processes: int, retries: int,
               help="Refuse, before decoding it, an input whose header claims more pixels.")
 @click.option("--interpolation", type=click.Choice(tuple(INTERPOLATIONS)), default="linear",
               show_default=True)
-@click.option("--fill", type=float, default=0.0, show_default=True,
+@click.option("--fill", type=Number(), default=0.0, show_default=True,
               help="Value of pixels with no source, in the image's units (0-255, 0-65535).")
 @click.option("--antialias/--no-antialias", default=True, show_default=True,
               help="Area-filter where the output shrinks the input (an output pixel over 1.5 "
@@ -407,12 +467,12 @@ def dask_executor(address: str, processes: int, retries: int,
               help="Make pixels with no source transparent (adds an alpha channel).")
 @click.option("--ext", default=None,
               help="Write this format (jpg, png, tif, webp, bmp) [default: the input's].")
-@click.option("--quality", type=click.IntRange(1, 100), default=95, show_default=True,
+@click.option("--quality", type=Integer(1, 100), default=95, show_default=True,
               help="JPEG and WebP quality.")
 @click.option("--table", "table_path", default=None,
               help="Where to write the table (.csv, .tsv, .json, .jsonl; - for stdout) "
                    "[default: OUTDIR/gsrwt.csv].")
-@click.option("-j", "--jobs", type=click.IntRange(min=1), default=None,
+@click.option("-j", "--jobs", type=Integer(1, MAX_JOBS), default=None,
               help="Worker processes [default: all cores].")
 @click.option("--overwrite", is_flag=True, help="Replace existing outputs instead of skipping.")
 @click.option("--dry-run", is_flag=True,
@@ -422,19 +482,20 @@ def dask_executor(address: str, processes: int, retries: int,
                    "(tcp://HOST:8786), or local for a local cluster of -j worker processes "
                    "[default: $DASK_SCHEDULER_ADDRESS, else worker processes here]. Needs "
                    "pip install 'gsrwt[dask]'.")
-@click.option("--retries", type=click.IntRange(min=0), default=2, show_default=True,
+@click.option("--retries", type=Integer(min=0), default=2, show_default=True,
               help="With --scheduler: times a task is run again when it fails or its "
                    "worker dies (the local cluster's; a remote scheduler keeps its own "
                    "allowed-failures).")
 @click.option("--shard", default=None, metavar="K/N",
               help="Process only the K-th of N equal slices of the input list (Slurm array "
-                   "jobs, CI matrices); the table is OUTDIR/gsrwt.K-of-N.csv; join the "
-                   "tables with 'gsrwt tables merge'.")
+                   "jobs, CI matrices); K and N in ASCII digits, 1 <= K <= N <= 1000000; the "
+                   "table is OUTDIR/gsrwt.K-of-N.csv; join the tables with 'gsrwt tables "
+                   "merge'.")
 @click.option("-q", "--quiet", is_flag=True, help="No progress bar and no summary.")
 @click.option("--auto", is_flag=True,
               help="Estimate the pose of images that no source gives pan and tilt for, from "
                    "their own lines (as 'gsrwt estimate'; the focal length too if unknown).")
-@click.option("--min-confidence", type=click.FloatRange(0, 1), default=0.0, show_default=True,
+@click.option("--min-confidence", type=Number(0, 1), default=0.0, show_default=True,
               help="With --auto: estimates less confident than this (0-1) are errors.")
 @click.option("--wall", type=click.Choice(WALL_CHOICES), default="dominant", show_default=True,
               help="With --auto: the wall to rectify is the vertical plane with the most "
@@ -471,8 +532,6 @@ def rectify(
     positive("--px-per-unit", px_per_unit)
     if scale is not None and px_per_unit is not None:
         raise click.UsageError("use either --scale or --px-per-unit, not both")
-    if not math.isfinite(fill):
-        raise click.BadParameter(f"must be a finite number, got {fill}", param_hint="'--fill'")
     pixel_limit = parse_pixel_count(max_pixels, "--max-pixels")
     input_pixel_limit = parse_pixel_count(max_input_pixels, "--max-input-pixels")
     size_limit = parse_size(max_size) if max_size is not None else None
@@ -548,7 +607,9 @@ def rectify(
         bbox=box, scale=scale or 1.0, px_per_unit=px_per_unit, max_stretch=max_stretch,
         max_pixels=pixel_limit, interpolation=interpolation, fill=fill, alpha=alpha,
         quality=quality, overwrite=overwrite, dry_run=dry_run,
-        max_input_pixels=input_pixel_limit, root=outdir, describe=describe_error,
+        max_input_pixels=input_pixel_limit, root=outdir,
+        describe=RectifyWording(box if isinstance(box, str) else "box",
+                                px_per_unit is not None, size_limit is not None),
         antialias=antialias, max_size=size_limit,
     )
     processes = jobs or os.cpu_count() or 1

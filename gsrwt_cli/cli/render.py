@@ -16,6 +16,7 @@ from ..targets import NotADirectoryTargetError, TargetError, UncreatableDirector
 from .options import (
     InputError,
     LocalPath,
+    Number,
     PathOrUrl,
     interpolation_option,
     option_message,
@@ -38,7 +39,7 @@ from .options import (
               help="Where to write the views' sidecar (.csv or .yaml) [default: OUTPUT's "
                    "NAME.yaml for one view, OUTPUT/views.csv with --sidecar].")
 @interpolation_option
-@click.option("--fill", type=float, default=0.0, show_default=True,
+@click.option("--fill", type=Number(), default=0.0, show_default=True,
               help="Value of pixels that see no texture.")
 @click.option("--alpha", is_flag=True, help="Make pixels that see no texture transparent.")
 @quality_option

@@ -13,10 +13,35 @@ import click
 from ..messages import quote
 from ..outputs import open_atomic
 from ..storage import Location, location
-from ..tables import MergeError, format_from_extension, merge_tables, order_shards
+from ..tables import (
+    FLAG,
+    MATRIX,
+    NAME,
+    NUMBER,
+    POSITIVE_WHOLE,
+    MergeError,
+    TableSchema,
+    choice,
+    format_from_extension,
+    order_shards,
+    read_shard_table,
+    write_merged,
+)
 from .options import InputError, prepare_table
 
 MACHINE_FORMATS = ("csv", "tsv", "json", "jsonl")
+
+
+def rectify_table() -> TableSchema:
+    """The table ``gsrwt rectify`` writes, each of its columns with what its cells hold."""
+    from ..batch import RECTIFY_COLUMNS  # with OpenCV: only when a table is merged
+    from ..pinhole import PARAMS_COLUMNS
+
+    kinds = {name: NUMBER for name in (*PARAMS_COLUMNS, "confidence", "scale")}
+    kinds.update(image=NAME, horizon_in_image=FLAG, out_width=POSITIVE_WHOLE,
+                 out_height=POSITIVE_WHOLE, homography=MATRIX,
+                 status=choice("ok", "skipped", "error", "interrupted", "planned"))
+    return TableSchema("gsrwt rectify", tuple(RECTIFY_COLUMNS), kinds)
 
 
 def table_format(name: str, option: str) -> str:
@@ -71,7 +96,8 @@ def merge(shard_tables: tuple[str, ...], output: str, quiet: bool) -> None:
     """Join the tables of `gsrwt rectify --shard K/N` runs into one, in input order.
 
     Tables named NAME.K-of-N.EXT are put in shard order, and all N must be given; other
-    tables are joined in the order given. All must have the same columns.
+    tables are joined in the order given. Each must be a table gsrwt rectify wrote: its
+    columns, and in each cell what gsrwt writes there (else nothing is written).
 
     \b
     Example:
@@ -90,22 +116,22 @@ def merge(shard_tables: tuple[str, ...], output: str, quiet: bool) -> None:
     if output != "-" and output in ordered:
         raise InputError(f"-o {output}: is one of the tables to merge; choose another path")
     prepare_table(output, "-o")
-    with contextlib.ExitStack() as stack:
-        streams = []
-        for name in ordered:
-            fmt = table_format(name, "")
-            try:
-                stream = stack.enter_context(_input(name))
-            except OSError as error:
-                raise InputError(f"{name}: cannot read ({error.strerror or error})") from None
-            streams.append((name, stream, fmt))
+    schema = rectify_table()
+    parts = []
+    for name in ordered:  # every table read and checked before anything is written
+        fmt = table_format(name, "")
         try:
-            with _output(output) as stream:
-                count = merge_tables(streams, stream, out_format)
+            with _input(name) as stream:
+                parts.append(read_shard_table(name, stream, fmt, schema))
+        except OSError as error:
+            raise InputError(f"{name}: cannot read ({error.strerror or error})") from None
         except MergeError as error:
             raise InputError(str(error)) from None
-        except OSError as error:
-            raise InputError(f"-o {output}: cannot write the table "
-                             f"({error.strerror or error})") from None
+    try:
+        with _output(output) as stream:
+            count = write_merged(parts, schema.columns, stream, out_format)
+    except OSError as error:
+        raise InputError(f"-o {output}: cannot write the table "
+                         f"({error.strerror or error})") from None
     if not quiet:
         click.echo(f"gsrwt: {count} rows from {len(ordered)} tables", err=True)
