@@ -266,6 +266,20 @@ class NothingWithinStretchError(ValueError):
                          f"({reason.format(max_stretch=max_stretch)})")
 
 
+class FrameOutsideImageError(ValueError):
+    """No pixel of the output frame has a source in the image: the frame lies where the
+    image does not see the wall (beside it, or beyond its horizon). Every output pixel would
+    be fill. ``bbox``: the frame asked for (``frontal``, ``full``, ``crop`` or ``box``);
+    ``beyond_horizon``: the whole image lies beyond the wall's horizon (no frame sees it)."""
+
+    def __init__(self, bbox: str, beyond_horizon: bool = False) -> None:
+        self.bbox, self.beyond_horizon = bbox, beyond_horizon
+        where = ("the whole image lies beyond the wall's horizon" if beyond_horizon else
+                 "the frame lies where the image does not see the wall")
+        super().__init__(f"no pixel of the output (--bbox {bbox}) has a source in the image: "
+                         f"{where}")
+
+
 class BeyondLensLimitError(ValueError):
     """All the output lies beyond the radius where the lens model folds back
     (:attr:`~gsrwt_cli.pixelmap.LensDistortion.limit`): nothing in it has a source."""
@@ -376,6 +390,13 @@ def _plan_output(
     pixel_map = PixelMap(homography, (width, height), lens_distortion(view))
     if not sees_within_lens_limit(pixel_map):
         raise BeyondLensLimitError(pixel_map.lens)
+    if not pixel_map.sees((view.width, view.height)):
+        corners = np.array([[-0.5, -0.5, 1.0], [view.width - 0.5, -0.5, 1.0],
+                            [-0.5, view.height - 0.5, 1.0],
+                            [view.width - 0.5, view.height - 0.5, 1.0]])
+        w = corners @ np.asarray(output_from_input(view), dtype=np.float64)[2]
+        raise FrameOutsideImageError(bbox if isinstance(bbox, str) else "box",
+                                     beyond_horizon=bool(np.all(w <= 0)))
     return Plan(view, frame, pixel_map)
 
 

@@ -425,6 +425,46 @@ class PixelMap:
         polygon = _clip_to_half_plane(corners, line)
         return np.array(polygon) if len(polygon) >= 3 else None
 
+    def sees(self, source_size: tuple[int, int], samples: int = 65) -> bool:
+        """Whether any of the output has a source in an input of ``source_size`` pixels:
+        a point in front of the horizon that maps inside the input's pixel edges.
+
+        Through a pinhole that region of the output is exact: the output's rectangle clipped
+        by five half-planes, all linear in the output point ``o`` for ``G = H^-1``:
+        ``G[2] . o > 0`` (in front of the horizon) and ``-0.5 <= (G[0] . o) / (G[2] . o) <=
+        W - 0.5``, likewise for rows, each multiplied out by the positive ``G[2] . o``. It
+        sees the input if that polygon has an area. Through a lens (or a lens on the output
+        side) ``samples x samples`` output points are mapped back instead.
+        """
+        width, height = self.size
+        source_width, source_height = source_size
+        if self.lens is not None or self.output_lens is not None:
+            cols = np.linspace(-0.5, width - 0.5, samples)
+            rows = np.linspace(-0.5, height - 0.5, samples)
+            outputs = np.stack(np.meshgrid(cols, rows), axis=-1).reshape(-1, 2)
+            with np.errstate(all="ignore"):
+                inverse = np.linalg.inv(np.asarray(self.output_from_input, dtype=np.float64))
+                ideal = outputs if self.output_lens is None else self.output_lens.undistort(
+                    outputs)
+                w = ideal @ inverse[2, :2] + inverse[2, 2]
+                inputs = self.to_input(outputs)
+                inside = ((w > 0) & np.all(np.isfinite(inputs), axis=1)
+                          & (inputs[:, 0] >= -0.5) & (inputs[:, 0] <= source_width - 0.5)
+                          & (inputs[:, 1] >= -0.5) & (inputs[:, 1] <= source_height - 0.5))
+            return bool(np.any(inside))
+        g = np.linalg.inv(np.asarray(self.output_from_input, dtype=np.float64))
+        polygon: list[tuple[float, float]] = [
+            (-0.5, -0.5), (width - 0.5, -0.5), (width - 0.5, height - 0.5),
+            (-0.5, height - 0.5)]
+        for line in (-g[2], -(g[0] + 0.5 * g[2]), g[0] - (source_width - 0.5) * g[2],
+                     -(g[1] + 0.5 * g[2]), g[1] - (source_height - 0.5) * g[2]):
+            polygon = _clip_to_half_plane(polygon, line)
+            if len(polygon) < 3:
+                return False
+        xs, ys = np.array(polygon).T
+        area = 0.5 * abs(float(np.dot(xs, np.roll(ys, -1)) - np.dot(ys, np.roll(xs, -1))))
+        return area > 1e-9
+
     def shrink(self, step: int = 8, source_size: tuple[int, int] | None = None) -> np.ndarray:
         """Input pixels per output pixel (the largest singular value of the output-to-input
         Jacobian) on a grid of every ``step``-th output pixel, shape ``(rows, cols)``.

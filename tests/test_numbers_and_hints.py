@@ -195,3 +195,55 @@ def test_a_pixel_target_with_half_an_image_size_asks_for_the_other_half(tmp_path
     assert result.returncode == 2
     assert result.stderr.strip() == (
         "Error: --to-pixel needs --height too (the image size), or --cx --cy")
+
+
+FRAMED_OUT = "no pixel of the default frame (--bbox frontal, around where the optical axis "
+
+
+@pytest.mark.parametrize(("options", "message"), [
+    # The whole image beyond the horizon: no frame can see it.
+    (("--cx", "2000", "--cy", "120"), "no part of the image is in front of the vanishing line; "
+                                      "check the pose and the principal point"),
+    # The image sees the wall, but not where the default frame lies.
+    (("--cx", "600", "--cy", "120"), FRAMED_OUT + "meets the wall) has a source in the "
+     "image; check the pose and the principal point, or frame what it sees with --bbox full"),
+    (("--camera", "lens.yaml"), FRAMED_OUT + "meets the wall) has a source in the image; "
+     "check the pose and the principal point, or frame what it sees with --bbox full"),
+    (("--bbox", "5000,5000,5100,5100"), "no pixel of --bbox has a source in the image: the box "
+     "lies where the image does not see the wall; choose one within --bbox full's frame"),
+])
+def test_a_frame_with_no_source_is_an_error_never_an_all_fill_ok(tmp_path, options, message):
+    """An output whose every pixel would be fill is refused with the reason (it was ``ok``,
+    all black, at pan 40 with the principal point right of the image); through a lens too
+    (a calibration file with the principal point at (600, 120) and k1 = -0.05)."""
+    from gsrwt_cli.calibration import write_opencv_yaml
+    from gsrwt_cli.camera import Intrinsics, Lens
+
+    write_opencv_yaml(tmp_path / "lens.yaml", Intrinsics(
+        300.0, 300.0, 600.0, 120.0, width=320, height=240,
+        lens=Lens("plumb_bob", (("k1", -0.05),))))
+    result = run_gsrwt("rectify", FRONTAL, "--pan", "40", "--tilt", "0", "--focal", "300",
+                       *options, "-o", "out", cwd=tmp_path)
+    assert result.returncode == 1, result.stderr
+    assert error_line(result) == f"Error: {FRONTAL}: {message}"
+    assert not (tmp_path / "out" / Path(FRONTAL).name).exists()
+
+
+def test_a_box_that_reaches_the_image_by_a_sliver_is_framed_exactly(tmp_path):
+    """Whether a frame sees the image is decided exactly (the output rectangle clipped by the
+    horizon and the image's edges), not by samples: at pan 20 the image's right edge lies at
+    x = 311.7404 in the default frame (pixel edges), so a box from x = 311.5 keeps a sliver a
+    quarter of a pixel wide, and one from 311.8 none."""
+    import cv2
+    import numpy as np
+
+    view = ("--pan", "20", "--tilt", "0", "--focal", "300")
+    inside = run_gsrwt("rectify", FRONTAL, *view, "--bbox", "311.5,0,411.5,240", "--alpha",
+                       "--ext", "png", "-o", "in", cwd=tmp_path)
+    assert inside.returncode == 0, inside.stderr
+    output = cv2.imread(str(tmp_path / "in" / Path(FRONTAL).name), cv2.IMREAD_UNCHANGED)
+    assert np.count_nonzero(output[..., 3]) > 0  # some pixels have a source
+    outside = run_gsrwt("rectify", FRONTAL, *view, "--bbox", "311.8,0,411.8,240", "-o", "out",
+                        cwd=tmp_path)
+    assert outside.returncode == 1
+    assert "no pixel of --bbox has a source in the image" in error_line(outside)

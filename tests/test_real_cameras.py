@@ -690,7 +690,9 @@ def test_nothing_beyond_a_folding_lens_radius_is_sampled(folded, index, name):
 
 def test_a_view_wholly_beyond_the_fold_is_refused_with_the_reason(tmp_path):
     """A frame that sees only rays beyond the fold radius is that image's error row (exit 1),
-    one line naming the fold; the batch's other image is rectified."""
+    one line naming the fold; the batch's other image is rectified. The box is the image's
+    top-left corner, 163 to 200 pixels from the principal point: beyond a's fold, within b's
+    image."""
     cv2.imwrite(str(tmp_path / "a.png"), smooth_texture(HEIGHT, WIDTH, 3))
     cv2.imwrite(str(tmp_path / "b.png"), smooth_texture(HEIGHT, WIDTH, 4))
     (tmp_path / "views.csv").write_text(
@@ -698,13 +700,15 @@ def test_a_view_wholly_beyond_the_fold_is_refused_with_the_reason(tmp_path):
         "a.png,0,0,600,plumb_bob,-5\n"  # folds 14.5 degrees (155 px) off axis
         "b.png,0,0,600,plumb_bob,-0.1\n")
     result = run_gsrwt("rectify", str(tmp_path / "a.png"), str(tmp_path / "b.png"),
-                       "--sidecar", str(tmp_path / "views.csv"), "--bbox", "600,0,700,100",
+                       "--sidecar", str(tmp_path / "views.csv"), "--bbox", "0,0,30,20",
                        "-o", str(tmp_path / "out"), "--table", "-")
     assert result.returncode == 1
     (line,) = [line for line in result.stderr.splitlines() if line.startswith("Error")]
     assert "a.png" in line and "lens model folds back 14.5 degrees off axis" in line
     assert "155 pixels" in line
-    assert (tmp_path / "out" / "b.png").exists() and not (tmp_path / "out" / "a.png").exists()
+    assert not (tmp_path / "out" / "a.png").exists()
+    corner = cv2.imread(str(tmp_path / "out" / "b.png"))
+    assert corner is not None and corner.std() > 0  # b's own pixels, not fill
     result = run_gsrwt("rectify", str(tmp_path / "a.png"), "--sidecar",
                        str(tmp_path / "views.csv"), "--bbox", "full", "-o", str(tmp_path / "full"))
     assert result.returncode == 0, result.stderr  # the whole image does see within it

@@ -41,7 +41,12 @@ from ..batch import (
 from ..calibration import CalibrationError
 from ..estimate import WALL_CHOICES
 from ..estimation import EstimateOptions
-from ..framing import EmptyOutputError, NothingWithinStretchError, OutputTooLargeError
+from ..framing import (
+    EmptyOutputError,
+    FrameOutsideImageError,
+    NothingWithinStretchError,
+    OutputTooLargeError,
+)
 from ..imaging import (
     INTERPOLATIONS,
     ImageError,
@@ -275,6 +280,19 @@ class RectifyWording:
                     f"{self._larger_output()}")
         if isinstance(error, NothingWithinStretchError):
             return self._nothing_within(error)
+        if isinstance(error, FrameOutsideImageError):
+            if error.beyond_horizon:
+                return ("no part of the image is in front of the vanishing line; check the "
+                        "pose and the principal point")
+            if self.bbox == "box":
+                return ("no pixel of --bbox has a source in the image: the box lies where the "
+                        "image does not see the wall; choose one within --bbox full's frame")
+            if self.bbox == "frontal":
+                return ("no pixel of the default frame (--bbox frontal, around where the "
+                        "optical axis meets the wall) has a source in the image; check the "
+                        "pose and the principal point, or frame what it sees with --bbox "
+                        "full")
+            return None
         if isinstance(error, MissingDistanceError):
             return ("--px-per-unit needs the camera-to-wall 'distance' of the image; give it "
                     "(--distance or a 'distance' column) or use --scale")
