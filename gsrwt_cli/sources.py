@@ -8,6 +8,7 @@ from dataclasses import dataclass
 from pathlib import Path, PurePosixPath
 
 from .imaging import IMAGE_EXTENSIONS
+from .messages import one_line
 from .storage import Location, list_files
 
 
@@ -63,9 +64,19 @@ def source_from_listed_path(text: str) -> Source:
     return Source(path, PurePosixPath(*[part for part in pure.parts if part != "."]))
 
 
-def sources_from_location(prefix: Location, recursive: bool) -> list[Source]:
+def sources_from_location(prefix: Location, recursive: bool,
+                          unreadable: list[str] | None = None) -> list[Source]:
     """Images below a URL prefix (sorted; its own level unless ``recursive``), with paths
     relative to it, hidden names skipped: one listing of the store
-    (:func:`~gsrwt_cli.storage.list_files`)."""
-    return [Source(item, relative) for item, relative in list_files(prefix, recursive)
-            if is_image_name(item)]
+    (:func:`~gsrwt_cli.storage.list_files`). An image whose key has an empty, ``.`` or
+    ``..`` part (no path can name its output) is reported in ``unreadable``."""
+    unusable: list[str] = []
+    sources = [Source(item, relative) for item, relative in list_files(prefix, recursive,
+                                                                        unusable)
+               if is_image_name(item)]
+    if unreadable is not None:
+        unreadable += [
+            f"{one_line(url, 300)}: its key has an empty, '.' or '..' part, which names no "
+            "output file; rename the object" for url in unusable
+            if PurePosixPath(url).suffix.lower() in IMAGE_EXTENSIONS]
+    return sources

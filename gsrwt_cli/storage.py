@@ -319,11 +319,16 @@ def walk_order(relative: PurePosixPath) -> tuple[tuple[int, str], ...]:
     return (*((1, part) for part in directories), (0, name))
 
 
-def list_files(prefix: Location, recursive: bool) -> list[tuple[Location, PurePosixPath]]:
+def list_files(prefix: Location, recursive: bool, unusable: list[str] | None = None,
+               ) -> list[tuple[Location, PurePosixPath]]:
     """Every object below ``prefix`` (only its own level unless ``recursive``), in the order
     a local directory's walk gives (:func:`walk_order`), with its path relative to
     ``prefix``; names beginning with a dot (and what lies below them) are left out. The
     names are kept for :meth:`Location.is_file`. One listing of the store.
+
+    A key is any text, but a path is not: a key below ``prefix`` with an empty, ``.`` or
+    ``..`` part (``in//a.jpg``, ``in/./a.jpg``, ``in/x/../a.jpg``) names no file an output
+    could keep, so it is left out and its full URL added to ``unusable``.
     """
     with _asking(prefix.url):
         fs, _ = _filesystem(prefix.url)
@@ -332,8 +337,14 @@ def list_files(prefix: Location, recursive: bool) -> list[tuple[Location, PurePo
     listed = []
     for name in found:
         stripped = fs._strip_protocol(name)
-        if stripped.startswith(base + "/"):
-            listed.append(PurePosixPath(stripped[len(base) + 1:]))
+        if not stripped.startswith(base + "/"):
+            continue
+        key = stripped[len(base) + 1:]
+        if any(part in ("", ".", "..") for part in key.split("/")):
+            if unusable is not None:
+                unusable.append(f"{prefix.url.rstrip('/')}/{key}")
+            continue
+        listed.append(PurePosixPath(key))
     files = []
     for relative in sorted(listed, key=walk_order):
         item = prefix / relative.as_posix()

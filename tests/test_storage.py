@@ -471,3 +471,29 @@ def test_a_local_run_does_not_import_fsspec_or_dask(tmp_path):
                             capture_output=True, text=True, timeout=120)
     assert result.stdout.strip() == "[]", result.stderr
     assert hashlib.sha256((tmp_path / "o" / "door_p8_t-2_f1500.jpg").read_bytes()).hexdigest()
+
+
+def test_keys_that_name_no_path_are_errors_never_misread_or_written_outside(s3, tmp_path):
+    """A key is any text: ``in//a.jpg``, ``in/./b.jpg`` and ``in/x/../../c.jpg`` name no
+    relative path an output could keep (a path library reads the first as absolute, the
+    second as ``in/b.jpg``, another object). Each is one error naming its URL; the good image
+    beside them is rectified, locally and to the store, and nothing lands outside ``-o``."""
+    fs, environment = s3
+    fs.mkdir("oddkeys")
+    door = (SAMPLES / "door_p8_t-2_f1500.jpg").read_bytes()
+    for key in ("in/good.jpg", "in//double.jpg", "in/./dot.jpg", "in/x/../../up.jpg"):
+        fs.pipe_file(f"oddkeys/{key}", door)
+    for output in (str(tmp_path / "out"), "s3://oddkeys/out/"):
+        result = run(environment, "rectify", "-r", "s3://oddkeys/in/", *POSE, "-o", output,
+                     cwd=tmp_path)
+        assert result.returncode == 1, result.stderr
+        errors = sorted(line for line in result.stderr.splitlines() if line.startswith("Error"))
+        assert errors == [
+            f"Error: s3://oddkeys/in/{key}: its key has an empty, '.' or '..' part, which names "
+            "no output file; rename the object" for key in ("./dot.jpg", "/double.jpg",
+                                                            "x/../../up.jpg")], result.stderr
+        assert "1 ok, 0 skipped, 3 failed" in result.stderr
+    assert sorted(path.name for path in (tmp_path / "out").iterdir()) == ["good.jpg",
+                                                                         "gsrwt.csv"]
+    assert sorted(name for name in fs.find("oddkeys/out")) == ["oddkeys/out/good.jpg",
+                                                              "oddkeys/out/gsrwt.csv"]

@@ -159,7 +159,7 @@ def collect_sources(inputs: tuple[str, ...], recursive: bool) -> tuple[list[Sour
             continue
         path = location(text)
         if isinstance(path, Location):
-            sources += sources_at_url(text, path, recursive)
+            sources += sources_at_url(text, path, recursive, unreadable)
         elif path.is_dir():
             try:
                 sources += sources_from_directory(path, recursive, unreadable)
@@ -172,12 +172,14 @@ def collect_sources(inputs: tuple[str, ...], recursive: bool) -> tuple[list[Sour
     return sources, unreadable
 
 
-def sources_at_url(text: str, url: Location, recursive: bool) -> list[Source]:
-    """The image a URL names, or the images below it (one listing), or an InputError."""
+def sources_at_url(text: str, url: Location, recursive: bool,
+                   unreadable: list[str] | None = None) -> list[Source]:
+    """The image a URL names, or the images below it (one listing; keys that name no path
+    reported in ``unreadable``), or an InputError."""
     try:
         if url.is_file():
             return [Source(url, PurePosixPath(url.name))]
-        found = sources_from_location(url, recursive)
+        found = sources_from_location(url, recursive, unreadable)
     except (OSError, ValueError) as error:
         reason = error.strerror if isinstance(error, OSError) and error.strerror else error
         raise InputError(f"{text}: cannot read ({one_line(str(reason), 200)})") from None
