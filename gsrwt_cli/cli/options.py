@@ -50,42 +50,41 @@ class PathOrUrl(click.Path):
 MAX_JOBS = 1024
 
 
-class Integer(click.IntRange):
-    """A whole-number option: ASCII digits (:func:`~gsrwt_cli.numerals.parse_whole`: no
-    ``+``, ``_``, space or other script's digits), within ``min`` and ``max`` if given."""
+class _AsciiNumber:
+    """A number option read by ``parse`` (ASCII digits only: no ``+``, ``_``, space or other
+    script's digits), then range-checked by the click range type it is mixed into."""
+
+    parse: Callable[[str], float]
+
+    def convert(self, value: Any, param: click.Parameter | None,
+                ctx: click.Context | None) -> Any:
+        if isinstance(value, str):
+            try:
+                value = self.parse(value)
+            except ValueError as error:
+                self.fail(f"{error}, got {quote(value)}", param, ctx)  # type: ignore[attr-defined]
+        return super().convert(value, param, ctx)  # type: ignore[misc]
+
+    def _describe_range(self) -> str:
+        if self.min is None and self.max is None:  # type: ignore[attr-defined]
+            return ""
+        return super()._describe_range()  # type: ignore[misc]
+
+
+class Integer(_AsciiNumber, click.IntRange):
+    """A whole-number option (:func:`~gsrwt_cli.numerals.parse_whole`), within ``min`` and
+    ``max`` if given."""
 
     name = "integer"
-
-    def convert(self, value: Any, param: click.Parameter | None,
-                ctx: click.Context | None) -> Any:
-        if isinstance(value, str):
-            try:
-                value = parse_whole(value)
-            except ValueError as error:
-                self.fail(f"{error}, got {quote(value)}", param, ctx)
-        return super().convert(value, param, ctx)
-
-    def _describe_range(self) -> str:
-        return "" if self.min is None and self.max is None else super()._describe_range()
+    parse = staticmethod(parse_whole)
 
 
-class Number(click.FloatRange):
-    """A number option: a finite decimal in ASCII digits
-    (:func:`~gsrwt_cli.numerals.parse_decimal`), within ``min`` and ``max`` if given."""
+class Number(_AsciiNumber, click.FloatRange):
+    """A number option: a finite decimal (:func:`~gsrwt_cli.numerals.parse_decimal`), within
+    ``min`` and ``max`` if given."""
 
     name = "float"
-
-    def convert(self, value: Any, param: click.Parameter | None,
-                ctx: click.Context | None) -> Any:
-        if isinstance(value, str):
-            try:
-                value = parse_decimal(value)
-            except ValueError as error:
-                self.fail(f"{error}, got {quote(value)}", param, ctx)
-        return super().convert(value, param, ctx)
-
-    def _describe_range(self) -> str:
-        return "" if self.min is None and self.max is None else super()._describe_range()
+    parse = staticmethod(parse_decimal)
 
 
 #: The option type of each kind of value of :data:`VIEW_OPTIONS`.
