@@ -30,8 +30,8 @@ import numpy as np  # noqa: E402
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
 from estimate_scenes import Shot, angle_between, random_shots  # noqa: E402
 
-from gsrwt_cli.camera import Intrinsics  # noqa: E402
-from gsrwt_cli.estimate import estimate_pose  # noqa: E402
+from gsrwt_cli.api.estimate import estimate_pose  # noqa: E402
+from gsrwt_cli.geometry.camera import Intrinsics  # noqa: E402
 
 GOALS = {"vertical": (0.6, 1.5), "normal": (0.7, 1.5)}  # median, 90th percentile (degrees)
 #: The lens of the third pass: a mild wide angle (OpenCV's plumb_bob k1), that the estimator

@@ -33,9 +33,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
 import chessboard_edges  # noqa: E402
 import door_renders  # noqa: E402
 
-from gsrwt_cli.landmarks import EdgeMap, hough_lines  # noqa: E402
-from gsrwt_cli.landmarks.edges import FILL_MARGIN, line_edges  # noqa: E402
-from gsrwt_cli.landmarks.frontal import frontal_edges, seen  # noqa: E402
+from gsrwt_cli.vision.edges import FILL_MARGIN, line_edges  # noqa: E402
+from gsrwt_cli.vision.frontal_pixels import frontal_edges, seen  # noqa: E402
+from gsrwt_cli.vision.landmarks import EdgeMap, hough_lines  # noqa: E402
 
 
 def frontal_stage(board, compensate: bool = True) -> EdgeMap:

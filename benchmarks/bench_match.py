@@ -2,7 +2,7 @@
 
 A 640x480 box of the rectified sample view ``door_p20_t-8_f800.jpg`` is searched for the
 knob (40x100) and the peek window (120x90) models over 5 scales, as ``gsrwt match`` does
-(edges of :func:`~gsrwt_cli.landmarks.edges.line_edges`, their time included); the best of
+(edges of :func:`~gsrwt_cli.vision.edges.line_edges`, their time included); the best of
 10 runs is reported, per template and for both, with OpenCV on one thread.
 
     python benchmarks/bench_match.py
@@ -16,9 +16,9 @@ from pathlib import Path
 import cv2
 
 from gsrwt_cli import View
-from gsrwt_cli.landmarks import build_template, match_template
-from gsrwt_cli.landmarks.edges import line_edges
-from gsrwt_cli.rectify import rectify_image
+from gsrwt_cli.api.rectify import rectify_image
+from gsrwt_cli.vision.edges import line_edges
+from gsrwt_cli.vision.landmarks import build_template, match_template
 
 SAMPLES = Path(__file__).resolve().parent.parent / "sample_data"
 

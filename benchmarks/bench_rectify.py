@@ -123,8 +123,8 @@ def _views(folder: Path) -> list[tuple[Path, float, float, float]]:
 def _task(path: Path, out: Path, pan: float, tilt: float, focal: float) -> tuple:
     """A floor's task: the image, its output, and the homography and size of gsrwt's frame."""
     from gsrwt_cli import View
-    from gsrwt_cli.imaging import image_file_size
-    from gsrwt_cli.rectify import plan_image
+    from gsrwt_cli.api.rectify import plan_image
+    from gsrwt_cli.imaging.images import image_file_size
 
     width, height = image_file_size(path)
     plan = plan_image(View(pan, tilt, focal), width, height)
@@ -155,7 +155,7 @@ def _read_best(source: str) -> np.ndarray:
 
 def _write(target: str, image: np.ndarray) -> None:
     """OpenCV's JPEG encode (quality 95), written atomically (temporary file, rename)."""
-    from gsrwt_cli.outputs import write_atomic
+    from gsrwt_cli.io.outputs import write_atomic
 
     ok, encoded = cv2.imencode(".jpg", image, [cv2.IMWRITE_JPEG_QUALITY, 95])
     assert ok
@@ -192,7 +192,7 @@ def _skimage_one(task: tuple) -> None:
 
 def _init(threads: int) -> None:
     """Each pool process as a gsrwt worker starts: its OpenCV threads and its heap."""
-    from gsrwt_cli.imaging import keep_freed_memory
+    from gsrwt_cli.imaging.images import keep_freed_memory
 
     keep_freed_memory()
     cv2.setNumThreads(threads)
@@ -229,7 +229,7 @@ def high_water_kib() -> int:
 
 def worker_memory(folder: Path, out: Path) -> None:
     """Run one gsrwt worker's loop over all images; print idle and peak memory (KiB)."""
-    from gsrwt_cli.batch import ImageWorker, Job, Settings
+    from gsrwt_cli.batch.rectify_jobs import ImageWorker, Job, Settings
 
     worker = ImageWorker.in_own_process(Settings(overwrite=True), opencv_threads=1)
     idle = high_water_kib()

@@ -12,7 +12,7 @@ import cv2
 import numpy as np
 
 from gsrwt_cli import View
-from gsrwt_cli.rectify import rectify_image
+from gsrwt_cli.api.rectify import rectify_image
 
 ROOT = Path(__file__).resolve().parent.parent
 

@@ -2,7 +2,7 @@
 
 Run from the repository: ``python docs/make_poses_figure.py``. The last panel is not drawn by
 hand: it projects a wall pattern through OpenCV's own camera (``cv2.projectPoints``) with the
-rvecs that :mod:`gsrwt_cli.poses` gives for roll 0 and roll +20 degrees.
+rvecs that :mod:`gsrwt_cli.geometry.rotations` gives for roll 0 and roll +20 degrees.
 """
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from gsrwt_cli.poses import rvec_from_pose
+from gsrwt_cli.geometry.rotations import rvec_from_pose
 
 PANEL_W, PANEL_H = 480, 400
 INK, GREY, RED, GREEN, BLUE = (30, 30, 30), (170, 170, 170), (40, 40, 200), (40, 150, 40), (

@@ -10,10 +10,21 @@ __version__ = "0.1.0"
 #: The package's API, each name imported from its module when first used: ``gsrwt --version``
 #: and every command import only what they need (numpy and OpenCV take most of a start-up).
 _API = {
-    "GsrwtParameters": "geometry",
-    "View": "camera",
-    "ViewError": "camera",
-    "gsrwt_parameters": "geometry",
+    "GsrwtParameters": "geometry.gsrwt",
+    "Intrinsics": "geometry.camera",
+    "Lens": "geometry.camera",
+    "Plan": "geometry.framing",
+    "Pose": "geometry.camera",
+    "PoseEstimate": "api.estimate",
+    "View": "geometry.camera",
+    "ViewError": "geometry.camera",
+    "estimate_pose": "api.estimate",
+    "gsrwt_parameters": "geometry.gsrwt",
+    "load_camera": "inputs.calibration",
+    "plan_image": "api.rectify",
+    "read_image": "imaging.images",
+    "rectify_image": "api.rectify",
+    "render_view": "batch.render_jobs",
 }
 
 __all__ = [*sorted(_API), "__version__"]

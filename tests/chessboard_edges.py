@@ -29,9 +29,9 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from gsrwt_cli.canonical import CanonicalView, canonical_views
-from gsrwt_cli.landmarks.frontal import seen
-from gsrwt_cli.sidecar import load_sidecar
+from gsrwt_cli.batch.canonical_views import CanonicalView, canonical_views
+from gsrwt_cli.inputs.sidecar import load_sidecar
+from gsrwt_cli.vision.frontal_pixels import seen
 
 DATA = Path(__file__).with_name("data")
 BOARD = (9, 6)

@@ -3,7 +3,7 @@ frame on a white wall among them), seen at pans up to 40 degrees, through optica
 noise and JPEG, then rectified with the true view.
 
 The camera image is rendered at twice the resolution (``gsrwt``'s forward model,
-:func:`~gsrwt_cli.render.render_view`) and area-averaged down, so that the far side of an
+:func:`~gsrwt_cli.batch.render_jobs.render_view`) and area-averaged down, so that the far side of an
 oblique wall is not aliased; then blurred (Gaussian, sigma 0.8 px), given noise (sigma 2.5 grey
 levels) and JPEG-encoded at quality 75. The true door edges are mapped from the texture to the
 camera image and into the frontal view through the same maps (the geometry itself is tested
@@ -20,10 +20,10 @@ from chessboard_edges import Board, Edge
 from conftest import smooth_texture
 
 from gsrwt_cli import View
-from gsrwt_cli.canonical import CanonicalView
-from gsrwt_cli.framing import render_map
-from gsrwt_cli.rectify import rectify_image
-from gsrwt_cli.render import render_view
+from gsrwt_cli.api.rectify import rectify_image
+from gsrwt_cli.batch.canonical_views import CanonicalView
+from gsrwt_cli.batch.render_jobs import render_view
+from gsrwt_cli.geometry.framing import render_map
 
 WIDTH, HEIGHT, FOCAL = 640, 480, 520.0
 FINE = 2  # rendered at FINE x the resolution, then averaged down

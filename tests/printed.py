@@ -1,5 +1,5 @@
 """Two implementations of one number compared as users see it: a table cell printed to
-:data:`~gsrwt_cli.tables.MACHINE_DECIMALS` places.
+:data:`~gsrwt_cli.tables.writer.MACHINE_DECIMALS` places.
 
 Two correct implementations of a formula (numpy's columns and one view's matrices, the
 ``math`` module and numpy, a BLAS kernel with fused multiply-adds and one without) agree to
@@ -24,7 +24,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from gsrwt_cli.tables import MACHINE_DECIMALS, _text_value
+from gsrwt_cli.tables.writer import MACHINE_DECIMALS, _text_value
 
 #: How far two correct implementations may put one value apart, relative to the value (and
 #: absolute below 1).

@@ -18,7 +18,8 @@ import cv2
 import numpy as np
 import pytest
 
-from gsrwt_cli.calibration import (
+from gsrwt_cli.geometry.camera import Intrinsics, Lens
+from gsrwt_cli.inputs.calibration import (
     MAX_FILE_BYTES,
     CalibrationError,
     intrinsics_close,
@@ -27,7 +28,6 @@ from gsrwt_cli.calibration import (
     write_opencv_yaml,
     write_ros_yaml,
 )
-from gsrwt_cli.camera import Intrinsics, Lens
 
 DATA = Path(__file__).parent / "data"
 CAMERA_FILES = ("right_camera.yml", "right_camera.xml", "right_camera_ros.yaml")
@@ -157,7 +157,7 @@ def test_a_file_written_by_opencv_4s_calibration_sample_reads():
 
 
 def _lens(model: str, count: int) -> Lens:
-    from gsrwt_cli.camera import LENS_MODELS
+    from gsrwt_cli.geometry.camera import LENS_MODELS
 
     values = [0.1 * (-1) ** index / (index + 1) for index in range(count)]
     return Lens(model, tuple(zip(LENS_MODELS[model][:count], values)))
@@ -392,7 +392,7 @@ def test_deep_nesting_that_crashes_opencvs_parser_is_refused_in_a_real_process(t
     path = tmp_path / "deep.yml"
     path.write_bytes(b"%YAML:1.0\na: " + b"[" * 200_000 + b"]" * 200_000 + b"\n")
     code = (
-        "import sys\nfrom gsrwt_cli.calibration import load_camera, CalibrationError\n"
+        "import sys\nfrom gsrwt_cli.inputs.calibration import load_camera, CalibrationError\n"
         "try:\n    load_camera(sys.argv[1])\nexcept CalibrationError as e:\n    print(e.reason)\n"
     )
     done = subprocess.run([sys.executable, "-c", code, str(path)], capture_output=True, text=True,
@@ -432,7 +432,7 @@ def test_opencv_json_filestorage_reads_too(tmp_path):
 
 
 def test_a_loaded_camera_makes_a_view():
-    from gsrwt_cli.camera import Pose, View
+    from gsrwt_cli.geometry.camera import Pose, View
 
     camera = load_camera(DATA / "right_camera_ros.yaml")
     view = View(intrinsics=camera, pose=Pose(20.0, -10.0), distance=14.0)
@@ -444,7 +444,7 @@ def test_a_loaded_camera_makes_a_view():
 _FUZZ = """
 import collections, os, sys, tempfile
 import numpy as np
-from gsrwt_cli.calibration import CalibrationError, load_camera
+from gsrwt_cli.inputs.calibration import CalibrationError, load_camera
 rng = np.random.default_rng(11)
 sources = [open(name, "rb").read() for name in sys.argv[1:]]
 alphabet = b"[]{}<>/:,- \\n\\t0123456789.eE+!%\\"'&*abcdefxyz"

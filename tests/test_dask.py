@@ -34,7 +34,7 @@ from test_faults import (
 distributed = (__import__("distributed") if os.environ.get("CI")
                else pytest.importorskip("distributed"))
 
-from gsrwt_cli.dask_executor import DaskExecutor  # noqa: E402
+from gsrwt_cli.batch.dask_executor import DaskExecutor  # noqa: E402
 
 SAMPLES = Path(__file__).resolve().parent.parent / "sample_data" / "views"
 
@@ -247,7 +247,7 @@ def test_the_local_cluster_runs_its_workers_without_the_dashboards_profiler():
     """The cluster gsrwt starts has no dashboard, so its workers sample no stacks (their
     other threads took a third of the CPU they took with the profiler, measured), and keep
     one malloc arena (freed image memory reused)."""
-    from gsrwt_cli.dask_executor import connect
+    from gsrwt_cli.batch.dask_executor import connect
 
     with connect("local", 2, 1) as client:
         settings = list(client.run(_worker_settings).values())

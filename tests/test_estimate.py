@@ -14,8 +14,8 @@ from estimate_scenes import C, angle_between, random_shots, render_room, world_f
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from gsrwt_cli.camera import Intrinsics, Lens
-from gsrwt_cli.estimate import PoseEstimate, estimate_pose
+from gsrwt_cli.api.estimate import PoseEstimate, estimate_pose
+from gsrwt_cli.geometry.camera import Intrinsics, Lens
 
 VIEWS = Path(__file__).resolve().parent.parent / "sample_data" / "views"
 

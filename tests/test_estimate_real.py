@@ -262,8 +262,8 @@ def test_the_lens_is_removed_on_real_photos_of_a_chessboard():
 
     from estimate_scenes import C, angle_between
 
-    from gsrwt_cli.estimate import estimate_pose
-    from gsrwt_cli.records import load_camera_file
+    from gsrwt_cli.api.estimate import estimate_pose
+    from gsrwt_cli.inputs.records import load_camera_file
 
     data = BUILDING.parent.parent
     camera = load_camera_file(str(data / "right_camera.yml"))

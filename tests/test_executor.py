@@ -9,7 +9,7 @@ import time
 
 import pytest
 
-from gsrwt_cli.executor import ITEMS_IN_FLIGHT, ProcessExecutor
+from gsrwt_cli.batch.executor import ITEMS_IN_FLIGHT, ProcessExecutor
 
 
 def _make_worker(deadly: frozenset[int]):

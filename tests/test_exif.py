@@ -13,7 +13,7 @@ import pytest
 from conftest import smooth_texture
 from PIL import Image, TiffImagePlugin
 
-from gsrwt_cli.exif import ExifFocal, focal_from_exif, read_exif_tags
+from gsrwt_cli.inputs.exif import ExifFocal, focal_from_exif, read_exif_tags
 
 RATIONAL, SRATIONAL, SHORT, LONG, ASCII, UNDEFINED = 5, 10, 3, 4, 2, 7
 FOCAL_LENGTH, FOCAL_35MM = 0x920A, 0xA405

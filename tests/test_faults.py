@@ -29,9 +29,9 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from gsrwt_cli import View
-from gsrwt_cli.batch import ImageWorker, Job, Settings
-from gsrwt_cli.outputs import TEMPORARY_PATTERN
-from gsrwt_cli.rectify import rectify_image
+from gsrwt_cli.api.rectify import rectify_image
+from gsrwt_cli.batch.rectify_jobs import ImageWorker, Job, Settings
+from gsrwt_cli.io.outputs import TEMPORARY_PATTERN
 
 #: Slow (out of the quick loop, ``pytest -m "not slow"``): the suite runs the command in
 #: subprocesses, kills them and fills disks.

@@ -14,7 +14,7 @@ from hypothesis import strategies as st
 
 from gsrwt_cli import View
 from gsrwt_cli.cli import main
-from gsrwt_cli.gaze import (
+from gsrwt_cli.geometry.gaze import (
     GazeTargetError,
     fixation_point,
     gaze_at,

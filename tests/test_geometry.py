@@ -11,9 +11,9 @@ from conftest import camera_axes, frontal_pixels, project_wall_points
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
-from gsrwt_cli.camera import View, ViewError
-from gsrwt_cli.framing import output_from_input
-from gsrwt_cli.geometry import (
+from gsrwt_cli.geometry.camera import View, ViewError
+from gsrwt_cli.geometry.framing import output_from_input
+from gsrwt_cli.geometry.gsrwt import (
     camera_from_world,
     gsrwt_inverse,
     gsrwt_matrix,

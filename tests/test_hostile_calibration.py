@@ -22,15 +22,15 @@ import numpy as np
 import pytest
 from conftest import run_gsrwt
 
-from gsrwt_cli.calibration import (
+from gsrwt_cli.base.messages import TOKEN_LIMIT
+from gsrwt_cli.geometry.camera import Intrinsics, Lens
+from gsrwt_cli.inputs.calibration import (
     CalibrationError,
     load_camera,
     write_opencv_xml,
     write_opencv_yaml,
     write_ros_yaml,
 )
-from gsrwt_cli.camera import Intrinsics, Lens
-from gsrwt_cli.messages import TOKEN_LIMIT
 
 DATA = Path(__file__).parent / "data"
 #: A camera of the 80x60 test images.
@@ -396,7 +396,7 @@ def _seed_files(folder: Path) -> list[tuple[str, str]]:
 
 _FUZZ = """
 import sys
-from gsrwt_cli.calibration import CalibrationError, load_camera
+from gsrwt_cli.inputs.calibration import CalibrationError, load_camera
 read = refused = 0
 for path in sys.argv[1:]:
     print("loading", path, flush=True)

@@ -12,8 +12,9 @@ import pytest
 from conftest import smooth_texture
 
 from gsrwt_cli import View
-from gsrwt_cli.framing import output_from_input
-from gsrwt_cli.imaging import (
+from gsrwt_cli.geometry.framing import output_from_input
+from gsrwt_cli.geometry.pixelmap import PixelMap
+from gsrwt_cli.imaging.images import (
     ImageError,
     Scratch,
     Working,
@@ -21,8 +22,7 @@ from gsrwt_cli.imaging import (
     read_image,
     warp_image,
 )
-from gsrwt_cli.outputs import write_atomic
-from gsrwt_cli.pixelmap import PixelMap
+from gsrwt_cli.io.outputs import write_atomic
 
 
 def test_scratch_gives_the_same_pixels_as_fresh_arrays_across_shapes_and_types(tmp_path):
@@ -132,7 +132,7 @@ def test_jpegs_decode_to_exactly_opencvs_pixels():
     checksum per image whatever SIMD the CPU has)."""
     from pathlib import Path
 
-    from gsrwt_cli.imaging import decode_image
+    from gsrwt_cli.imaging.images import decode_image
 
     samples = [path.read_bytes() for path in sorted((Path(__file__).parent / "data")
                                                      .glob("*.jpg"))]

@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 from conftest import run_gsrwt, smooth_texture
 
-from gsrwt_cli.imaging import ImageError, decode_image
-from gsrwt_cli.jpeg_stream import jpeg_stream_end
+from gsrwt_cli.imaging.images import ImageError, decode_image
+from gsrwt_cli.io.jpeg_stream import jpeg_stream_end
 
 DATA = Path(__file__).parent / "data"
 PHOTO = DATA / "right01.jpg"  # a real camera's JPEG (OpenCV's sample data)

@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 from conftest import smooth_texture
 
-from gsrwt_cli.landmarks import build_template, edge_map, hough_lines, match_template
-from gsrwt_cli.landmarks.edges import line_edges
+from gsrwt_cli.vision.edges import line_edges
+from gsrwt_cli.vision.landmarks import build_template, edge_map, hough_lines, match_template
 
 #: Model bounding boxes of the thesis, read as ``(width, height)`` in pixels (Sec. 5.2.2: "40x100"
 #: for the door knob, "120x90" for the peek window).

@@ -32,9 +32,9 @@ from chessboard_edges import (
 from conftest import run_gsrwt
 from door_renders import door_views
 
-from gsrwt_cli.landmarks import hough_lines
-from gsrwt_cli.landmarks.edges import line_edges
-from gsrwt_cli.landmarks.frontal import frontal_edges, seen
+from gsrwt_cli.vision.edges import line_edges
+from gsrwt_cli.vision.frontal_pixels import frontal_edges, seen
+from gsrwt_cli.vision.landmarks import hough_lines
 
 POSES = ["--sidecar", str(DATA / "right_poses.csv"), "--camera", str(DATA / "right_camera.yml")]
 

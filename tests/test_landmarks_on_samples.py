@@ -14,8 +14,8 @@ from conftest import camera_axes
 
 from gsrwt_cli import View
 from gsrwt_cli.cli import main
-from gsrwt_cli.framing import local_stretch, output_from_input
-from gsrwt_cli.geometry import map_points
+from gsrwt_cli.geometry.framing import local_stretch, output_from_input
+from gsrwt_cli.geometry.gsrwt import map_points
 
 SAMPLES = Path(__file__).resolve().parent.parent / "sample_data"
 VIEWS = {r["image"]: r for r in csv.DictReader(io.StringIO(

@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 from conftest import run_gsrwt, smooth_texture
 
-from gsrwt_cli.batch import plan_jobs
-from gsrwt_cli.canonical import CanonicalView, canonical_views
-from gsrwt_cli.parameters import (
+from gsrwt_cli.batch.canonical_views import CanonicalView, canonical_views
+from gsrwt_cli.batch.rectify_jobs import plan_jobs
+from gsrwt_cli.inputs.parameters import (
     Found,
     NotFound,
     Origin,
@@ -21,9 +21,9 @@ from gsrwt_cli.parameters import (
     adjacent_yaml,
     resolve_parameters,
 )
-from gsrwt_cli.records import RecordError
-from gsrwt_cli.sidecar import load_sidecar
-from gsrwt_cli.sources import Source
+from gsrwt_cli.inputs.records import RecordError
+from gsrwt_cli.inputs.sidecar import load_sidecar
+from gsrwt_cli.inputs.sources import Source
 
 OPTIONS = {"pan": 5.0, "tilt": 6.0, "focal": 280.0}
 

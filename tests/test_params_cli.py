@@ -12,7 +12,7 @@ from printed import PrintedComparison, allowed, assert_table_prints_rows
 from test_geometry import FIG_5_2, TABLE_5_1, TABLE_5_2
 
 from gsrwt_cli.cli import main
-from gsrwt_cli.report import PARAMS_COLUMNS
+from gsrwt_cli.tables.rows import PARAMS_COLUMNS
 
 
 def invoke(*args: str):
@@ -293,8 +293,8 @@ def test_views_computed_together_print_what_their_views_print():
     rounding boundary), and every error is the view's own."""
     import random
 
-    from gsrwt_cli.records import RecordError, view_from_values
-    from gsrwt_cli.report import params_row, params_rows
+    from gsrwt_cli.inputs.records import RecordError, view_from_values
+    from gsrwt_cli.tables.rows import params_row, params_rows
 
     rng = random.Random(7)
     records = [_random_record(rng, index) for index in range(20_000)]
@@ -320,9 +320,9 @@ def test_a_plain_csv_chunk_computed_as_columns_writes_what_its_views_would(kind)
     written as columns: the same csv and json, byte for byte, as each row's own view gives."""
     import random
 
-    from gsrwt_cli.records import view_from_values
-    from gsrwt_cli.report import PARAMS_CHUNK, ParamsBlock, params_row, params_rows
-    from gsrwt_cli.tables import TableWriter
+    from gsrwt_cli.inputs.records import view_from_values
+    from gsrwt_cli.tables.rows import PARAMS_CHUNK, ParamsBlock, params_row, params_rows
+    from gsrwt_cli.tables.writer import TableWriter
 
     rng = random.Random(kind)
     records = []
@@ -352,8 +352,8 @@ def test_a_plain_csv_chunk_computed_as_columns_writes_what_its_views_would(kind)
 def test_a_chunk_with_one_odd_cell_is_computed_row_by_row():
     """One cell that is not plain decimal text (here ``1_000``, which Python's float reads)
     sends its chunk the long way: that row is the error its view gives."""
-    from gsrwt_cli.records import RecordError
-    from gsrwt_cli.report import ParamsBlock, params_rows
+    from gsrwt_cli.inputs.records import RecordError
+    from gsrwt_cli.tables.rows import ParamsBlock, params_rows
 
     records = [(f"i{index}", {"pan": "10", "tilt": "5", "focal": "300"}, f"v line {index}")
                for index in range(50)]
@@ -373,9 +373,9 @@ def test_a_big_plain_sidecar_through_the_command_is_its_views_row_by_row(tmp_pat
     malformed row in the third chunk (the rows before it are out; exit 2 naming its line)."""
     import random
 
-    from gsrwt_cli.records import view_from_values
-    from gsrwt_cli.report import params_row
-    from gsrwt_cli.sidecar import CHUNK_ROWS
+    from gsrwt_cli.inputs.records import view_from_values
+    from gsrwt_cli.inputs.sidecar import CHUNK_ROWS
+    from gsrwt_cli.tables.rows import params_row
 
     rng = random.Random(fmt)
     lines, views = ["image,pan,tilt,focal,height,notes,roll"], []
@@ -399,7 +399,8 @@ def test_a_big_plain_sidecar_through_the_command_is_its_views_row_by_row(tmp_pat
 
 def test_one_plain_view_computed_without_numpy_prints_its_views_row():
     """``gsrwt params`` with options computes a plain square-pixel pinhole by the math
-    module alone (:mod:`gsrwt_cli.pinhole`): for random options, frontal views, horizons near
+    module alone (:mod:`gsrwt_cli.geometry.pinhole`): for random options, frontal views, horizons
+    near
     the principal point and every combination of size and principal point, the row prints
     what the view's row prints (:mod:`printed`: a second implementation, compared as the
     table shows it) type for type, and None where the view refuses (its error is then the
@@ -408,7 +409,7 @@ def test_one_plain_view_computed_without_numpy_prints_its_views_row():
     import math
     import random
 
-    from gsrwt_cli.bounds import MIN_HORIZON_OFFSET_PX
+    from gsrwt_cli.geometry.bounds import MIN_HORIZON_OFFSET_PX
 
     def near_the_horizon_bound(numbers: tuple[float, ...]) -> bool:
         pan, tilt, focal = math.radians(numbers[0]), math.radians(numbers[1]), numbers[2]
@@ -416,9 +417,9 @@ def test_one_plain_view_computed_without_numpy_prints_its_views_row():
         offset = focal * math.cos(pan) * math.cos(tilt) / sin_theta
         return abs(offset - MIN_HORIZON_OFFSET_PX) <= allowed(MIN_HORIZON_OFFSET_PX)
 
-    from gsrwt_cli.pinhole import pinhole_numbers, pinhole_params_row
-    from gsrwt_cli.records import RecordError, view_from_values
-    from gsrwt_cli.report import params_row
+    from gsrwt_cli.geometry.pinhole import pinhole_numbers, pinhole_params_row
+    from gsrwt_cli.inputs.records import RecordError, view_from_values
+    from gsrwt_cli.tables.rows import params_row
 
     rng = random.Random(11)
     checked = refused = 0
@@ -460,10 +461,10 @@ def test_a_bad_value_after_plain_chunks_is_its_own_error_and_the_rest_are_printe
     """A row that is no valid view, deep in a big file after chunks computed as columns: its
     chunk goes row by row, the error names its line, every other row (before and after it,
     in that chunk and the next) is printed as its view gives it, and the exit status is 2."""
-    from gsrwt_cli.records import view_from_values
-    from gsrwt_cli.report import params_row
-    from gsrwt_cli.sidecar import CHUNK_ROWS
-    from gsrwt_cli.tables import TableWriter
+    from gsrwt_cli.inputs.records import view_from_values
+    from gsrwt_cli.inputs.sidecar import CHUNK_ROWS
+    from gsrwt_cli.tables.rows import params_row
+    from gsrwt_cli.tables.writer import TableWriter
 
     lines, views = ["image,pan,tilt,focal"], []
     for index in range(2 * CHUNK_ROWS):

@@ -18,8 +18,8 @@ from conftest import camera_axes, project_wall_points, rodrigues
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
-from gsrwt_cli.geometry import camera_from_world
-from gsrwt_cli.poses import (
+from gsrwt_cli.geometry.gsrwt import camera_from_world
+from gsrwt_cli.geometry.rotations import (
     QUATERNION_NORM_SQUARED_TOLERANCE,
     THESIS_FROM_OPENCV,
     PoseAngles,

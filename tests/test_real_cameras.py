@@ -18,8 +18,8 @@ import pytest
 from conftest import camera_axes, psnr, run_gsrwt, smooth_texture
 
 from gsrwt_cli import View
-from gsrwt_cli.camera import Lens
-from gsrwt_cli.report import params_row
+from gsrwt_cli.geometry.camera import Lens
+from gsrwt_cli.tables.rows import params_row
 
 WIDTH, HEIGHT, DISTANCE = 320, 240, 10.0
 TEXTURE = smooth_texture(700, 900, 21)
@@ -197,7 +197,7 @@ def test_undistorting_first_and_warping_second_is_worse_than_one_pass(rectified)
     undistorted = cv2.undistort(image, camera.k, camera.coefficients)
     view = View(case["pan"], case["tilt"], roll=case["roll"], fx=case["fx"], fy=case["fy"],
                 cx=CX, cy=CY, width=WIDTH, height=HEIGHT)
-    from gsrwt_cli.framing import output_from_input
+    from gsrwt_cli.geometry.framing import output_from_input
 
     two_pass = cv2.warpPerspective(undistorted, output_from_input(view), (WIDTH, HEIGHT),
                                    flags=cv2.INTER_LINEAR)
@@ -241,7 +241,7 @@ def test_params_reports_roll_and_both_focal_lengths(tmp_path):
 def test_rectify_remembers_maps_of_repeated_poses(tmp_path):
     """A pan-tilt unit revisits poses: the second image of a pose reuses the first's maps,
     and gives exactly the same pixels as a fresh computation would."""
-    from gsrwt_cli.pixelmap import MAP_CACHE
+    from gsrwt_cli.geometry.pixelmap import MAP_CACHE
 
     case = CASES["plumb_bob"]
     camera = camera_of(case)
@@ -249,7 +249,7 @@ def test_rectify_remembers_maps_of_repeated_poses(tmp_path):
     lens = Lens("plumb_bob", tuple(case["coefficients"].items()))
     view = View(case["pan"], case["tilt"], roll=case["roll"], fx=case["fx"], fy=case["fy"],
                 cx=CX, cy=CY, lens=lens)
-    from gsrwt_cli.rectify import rectify_image
+    from gsrwt_cli.api.rectify import rectify_image
 
     MAP_CACHE.clear()
     first, _ = rectify_image(image, view, antialias=False)
@@ -271,7 +271,7 @@ def test_a_bad_lens_in_a_sidecar_names_the_row_and_field(tmp_path):
 def test_full_frame_follows_the_distorted_border():
     """--bbox full of a barrel-distorted view covers what the lens shows, which a pinhole of
     the same K would not: its extent comes from the undistorted image border."""
-    from gsrwt_cli.framing import full_frame
+    from gsrwt_cli.geometry.framing import full_frame
 
     lens = Lens("plumb_bob", (("k1", -0.3), ("k2", 0.08)))
     pinhole = View(10, 5, 240, width=WIDTH, height=HEIGHT)
@@ -288,7 +288,7 @@ def test_sidecar_poses_from_solvepnp_and_quaternions(tmp_path):
     error."""
     import json
 
-    from gsrwt_cli.poses import opencv_from_world_from_camera, quaternion_from_rotation
+    from gsrwt_cli.geometry.rotations import opencv_from_world_from_camera, quaternion_from_rotation
 
     pan, tilt, roll = 25.0, -12.0, 8.0
     up, right, forward = camera_axes(pan, tilt, roll)
@@ -319,7 +319,7 @@ def test_sidecar_poses_from_solvepnp_and_quaternions(tmp_path):
 
 
 def test_the_distance_of_a_tvec_is_along_the_walls_normal():
-    from gsrwt_cli.records import view_from_values
+    from gsrwt_cli.inputs.records import view_from_values
 
     # A camera turned left by 30 degrees, 2 units from the wall: tvec_z is 2 / cos 30.
     view = view_from_values({"rvec_x": 0, "rvec_y": math.pi / 6, "rvec_z": 0, "tvec_x": 0,
@@ -342,7 +342,7 @@ def fine_texture(height: int, width: int) -> np.ndarray:
 def antialias_gain(image: np.ndarray, view: View, scale: float):
     """PSNR of plain bilinear and of antialiased rectification against an area-averaged
     reference: the same map applied to a 4x supersampled input, then averaged 4x4."""
-    from gsrwt_cli.rectify import rectify_image
+    from gsrwt_cli.api.rectify import rectify_image
 
     plain, info = rectify_image(image, view, scale=scale, antialias=False)
     filtered, _ = rectify_image(image, view, scale=scale, antialias=True)
@@ -368,7 +368,7 @@ def test_antialiasing_where_the_output_shrinks_the_input():
 
 
 def test_antialiasing_changes_nothing_where_nothing_shrinks():
-    from gsrwt_cli.rectify import rectify_image
+    from gsrwt_cli.api.rectify import rectify_image
 
     image = fine_texture(240, 320)
     view = View(10, 5, 300)  # shrinks at most ~1.2x in the default frame
@@ -459,8 +459,8 @@ def test_bbox_crop_is_the_largest_rectangle_without_fill(tmp_path, name):
 def test_render_through_a_lens_and_rectify_it_back():
     """gsrwt render of a distorted camera, rectified through the same lens, gives the same
     frontal view as a pinhole camera's render rectified: the lens is undone exactly once."""
-    from gsrwt_cli.rectify import rectify_image
-    from gsrwt_cli.render import render_view
+    from gsrwt_cli.api.rectify import rectify_image
+    from gsrwt_cli.batch.render_jobs import render_view
 
     lens = Lens("plumb_bob", (("k1", -0.25), ("k2", 0.05), ("p1", 0.001)))
     common = dict(roll=10, fx=250, fy=240, cx=CX, cy=CY, width=WIDTH, height=HEIGHT)
@@ -485,8 +485,8 @@ def test_render_through_a_lens_and_rectify_it_back():
 ])
 def test_big_frames_lens_maps_interpolated_from_a_grid_err_under_a_hundredth_pixel(
         model, coefficients, focal):
-    from gsrwt_cli.framing import lens_distortion
-    from gsrwt_cli.rectify import plan_image
+    from gsrwt_cli.api.rectify import plan_image
+    from gsrwt_cli.geometry.framing import lens_distortion
 
     plan = plan_image(View(20, 15, focal, roll=7, lens=Lens(model, coefficients)), 2000, 1500)
     lens = lens_distortion(plan.view)
@@ -500,9 +500,9 @@ def test_big_frames_lens_maps_interpolated_from_a_grid_err_under_a_hundredth_pix
 def test_big_frames_maps_reuse_the_last_frames_memory_and_stay_exact():
     """Maps of frames too big to keep several of are written into the memory of the last
     frame's maps: each pose's maps are still exactly those of a fresh computation."""
-    from gsrwt_cli.framing import lens_distortion
-    from gsrwt_cli.pixelmap import MAP_CACHE, _MapCache
-    from gsrwt_cli.rectify import plan_image
+    from gsrwt_cli.api.rectify import plan_image
+    from gsrwt_cli.geometry.framing import lens_distortion
+    from gsrwt_cli.geometry.pixelmap import MAP_CACHE, _MapCache
 
     lens_model = Lens("plumb_bob", (("k1", -0.2), ("k2", 0.05)))
     plans = [plan_image(View(pan, 10, 1800, lens=lens_model), 1600, 1200) for pan in (15, 25)]
@@ -528,9 +528,9 @@ def test_big_frames_revisited_poses_take_their_grid_from_the_cache():
     expanded from its kept grid, without evaluating the lens again, into the last frame's
     memory, and its maps are exactly a fresh computation's; the grids stay within their
     budget, oldest out first."""
-    from gsrwt_cli.framing import lens_distortion
-    from gsrwt_cli.pixelmap import _MapCache
-    from gsrwt_cli.rectify import plan_image
+    from gsrwt_cli.api.rectify import plan_image
+    from gsrwt_cli.geometry.framing import lens_distortion
+    from gsrwt_cli.geometry.pixelmap import _MapCache
 
     lens_model = Lens("plumb_bob", (("k1", -0.2), ("k2", 0.05)))
     plans = [plan_image(View(pan, 10, 1800, lens=lens_model), 1600, 1200)
@@ -555,9 +555,9 @@ def test_big_frames_revisited_poses_take_their_grid_from_the_cache():
 def test_lens_shrink_from_the_maps_matches_the_lens_projection():
     """The anti-aliasing's shrink through a lens is read off the warp's own maps; it agrees
     with finite differences of the lens projection (cv2.projectPoints) to 1 %."""
-    from gsrwt_cli.framing import lens_distortion
-    from gsrwt_cli.geometry import largest_singular_value
-    from gsrwt_cli.rectify import plan_image
+    from gsrwt_cli.api.rectify import plan_image
+    from gsrwt_cli.geometry.framing import lens_distortion
+    from gsrwt_cli.geometry.gsrwt import largest_singular_value
 
     plan = plan_image(View(55, 10, 700, lens=Lens("plumb_bob", (("k1", -0.25), ("k2", 0.06)))),
                       1600, 1200, scale=0.4)
@@ -726,7 +726,7 @@ def test_the_inverse_of_a_strong_lens_is_its_monotonic_part(model, coefficients)
     the image by OpenCV's projection, come back to their rays (where OpenCV's own fisheye
     inverse stops at 90 degrees of distorted angle); pixels beyond any ray's reach have no
     ideal pixel (NaN), and the lens never maps a ray beyond the fold."""
-    from gsrwt_cli.framing import lens_distortion
+    from gsrwt_cli.geometry.framing import lens_distortion
 
     focal = 200.0
     lens = lens_distortion(View(0, 0, focal, width=WIDTH, height=HEIGHT,

@@ -15,8 +15,8 @@ from click.testing import CliRunner
 from conftest import expected_rectified, psnr, render_view, smooth_texture
 
 from gsrwt_cli import View
+from gsrwt_cli.api.rectify import rectify_image
 from gsrwt_cli.cli import main
-from gsrwt_cli.rectify import rectify_image
 
 TEXTURE = smooth_texture(1400, 1800, seed=1)
 DISTANCE = 10.0

@@ -10,11 +10,11 @@ from click.testing import CliRunner
 from conftest import psnr, render_view, smooth_texture
 
 from gsrwt_cli import View
+from gsrwt_cli.batch.render_jobs import plan_one_view, plan_views, render_views, write_views_sidecar
+from gsrwt_cli.batch.render_jobs import render_view as gsrwt_render_view
 from gsrwt_cli.cli import main
-from gsrwt_cli.render import plan_one_view, plan_views, render_views, write_views_sidecar
-from gsrwt_cli.render import render_view as gsrwt_render_view
-from gsrwt_cli.sidecar import load_sidecar
-from gsrwt_cli.targets import DirectoryTargetError, ExistingOutputError, InputOverwriteError
+from gsrwt_cli.inputs.sidecar import load_sidecar
+from gsrwt_cli.io.targets import DirectoryTargetError, ExistingOutputError, InputOverwriteError
 
 TEXTURE = smooth_texture(900, 1200, seed=5)
 

@@ -22,8 +22,8 @@ import pytest
 from conftest import run_gsrwt, smooth_texture
 from test_faults import POSE, make_photos, table_rows
 
-from gsrwt_cli.calibration import write_opencv_yaml
-from gsrwt_cli.camera import Intrinsics, Lens
+from gsrwt_cli.geometry.camera import Intrinsics, Lens
+from gsrwt_cli.inputs.calibration import write_opencv_yaml
 
 BASE = ("--pan", "20", "--tilt", "10", "--focal", "500")
 

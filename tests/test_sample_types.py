@@ -16,7 +16,7 @@ import pytest
 from conftest import run_gsrwt
 from estimate_scenes import render_room
 
-from gsrwt_cli.landmarks.edges import grey8, pixels8
+from gsrwt_cli.vision.edges import grey8, pixels8
 
 ROOT = Path(__file__).resolve().parent.parent
 VIEWS = ROOT / "sample_data" / "views"

@@ -14,7 +14,7 @@ import pytest
 from conftest import camera_axes, psnr
 
 from gsrwt_cli import View
-from gsrwt_cli.framing import local_stretch, output_from_input
+from gsrwt_cli.geometry.framing import local_stretch, output_from_input
 
 SAMPLES = Path(__file__).resolve().parent.parent / "sample_data"
 VIEWS = list(csv.DictReader(io.StringIO((SAMPLES / "views" / "views.csv").read_text())))

@@ -15,8 +15,8 @@ from pathlib import Path
 import pytest
 from conftest import run_gsrwt
 
-from gsrwt_cli.batch import RECTIFY_COLUMNS
-from gsrwt_cli.tables import MAX_SHARDS, order_shards, shard_slice
+from gsrwt_cli.batch.rectify_jobs import RECTIFY_COLUMNS
+from gsrwt_cli.tables.writer import MAX_SHARDS, order_shards, shard_slice
 
 SAMPLES = Path(__file__).resolve().parent.parent / "sample_data" / "views"
 

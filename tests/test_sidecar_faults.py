@@ -25,18 +25,18 @@ from conftest import run_gsrwt
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from gsrwt_cli.camera import (
+from gsrwt_cli.geometry.camera import (
     MAX_FOCAL_PX,
     MAX_SIDE_PX,
     MIN_HORIZON_OFFSET_PX,
     View,
     ViewError,
 )
-from gsrwt_cli.framing import output_from_input
-from gsrwt_cli.records import RecordError, view_from_values
-from gsrwt_cli.report import PARAMS_COLUMNS, params_row
-from gsrwt_cli.safe_yaml import MAX_DEPTH, YamlInputError, load_yaml
-from gsrwt_cli.sidecar import SidecarError, load_sidecar
+from gsrwt_cli.geometry.framing import output_from_input
+from gsrwt_cli.inputs.records import RecordError, view_from_values
+from gsrwt_cli.inputs.sidecar import SidecarError, load_sidecar
+from gsrwt_cli.io.safe_yaml import MAX_DEPTH, YamlInputError, load_yaml
+from gsrwt_cli.tables.rows import PARAMS_COLUMNS, params_row
 
 #: Bound on one stderr line of ``gsrwt`` about a sidecar (the path is short in these tests).
 LINE_BOUND = 500

@@ -6,6 +6,7 @@ cause, in real subprocesses: which heavy libraries a command line imports.
 
 from __future__ import annotations
 
+import ast
 import os
 import subprocess
 import sys
@@ -103,3 +104,23 @@ def test_the_command_gives_numpy_one_blas_thread_unless_the_user_set_theirs():
     assert threads("command") == 1
     assert threads("command", OPENBLAS_NUM_THREADS="2") == 2
     assert threads("library") == min(os.cpu_count() or 1, 64)
+
+
+def test_the_package_exports_the_library_lazily():
+    """``import gsrwt_cli`` loads no heavy library; each name a library user needs
+    (``gsrwt_cli.View``, ``rectify_image``, ``estimate_pose``, ...) resolves on first use to
+    the object its layer defines."""
+    code = ("import sys, gsrwt_cli\n"
+            f"heavy = {HEAVY!r}\n"
+            "print(sorted(name for name in heavy if name in sys.modules))\n"
+            "for name in gsrwt_cli.__all__:\n"
+            "    value = getattr(gsrwt_cli, name)\n"
+            "    assert name == '__version__' or value.__name__ == name, name\n"
+            "print(sorted(gsrwt_cli.__all__))\n")
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                            check=False)
+    assert result.returncode == 0, result.stderr[-2000:]
+    loaded, exported = result.stdout.splitlines()
+    assert loaded == "[]"
+    assert {"View", "Intrinsics", "Pose", "rectify_image", "plan_image", "estimate_pose",
+            "read_image", "render_view", "load_camera"} <= set(ast.literal_eval(exported))

@@ -32,8 +32,8 @@ _need("s3fs")
 moto_server = _need("moto.server")
 distributed = _need("distributed")
 
-from gsrwt_cli.outputs import OutsideOutputError, check_inside, open_atomic  # noqa: E402
-from gsrwt_cli.storage import Location, is_url, list_files, location  # noqa: E402
+from gsrwt_cli.io.outputs import OutsideOutputError, check_inside, open_atomic  # noqa: E402
+from gsrwt_cli.io.storage import Location, is_url, list_files, location  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 SAMPLES = ROOT / "sample_data" / "views"

@@ -14,7 +14,7 @@ from typing import Any, NoReturn
 import click
 
 from .. import __version__
-from ..messages import escape_controls, one_line, shorten
+from ..base.messages import escape_controls, one_line, shorten
 
 #: Exit status of a command whose standard output was closed by its reader: 128 + SIGPIPE,
 #: what a shell reports for ``cat`` killed by SIGPIPE in ``cat big | head -1``.
@@ -229,7 +229,7 @@ def run() -> None:
     os.environ["OPENCV_LOG_LEVEL"] = "SILENT"
     one_blas_thread()
     if "cv2" in sys.modules:
-        from ..imaging import silence_opencv_logging
+        from ..imaging.images import silence_opencv_logging
 
         silence_opencv_logging()
     # File names are bytes on POSIX; Python gives a name that is not valid UTF-8 to us with

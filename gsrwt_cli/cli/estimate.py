@@ -10,15 +10,16 @@ from typing import Any
 import click
 from tqdm import tqdm
 
-from ..calibration import CalibrationError
-from ..estimate import WALL_CHOICES
-from ..estimation import ESTIMATE_COLUMNS, EstimateJob, EstimateOptions, run_estimates
-from ..messages import one_line
-from ..records import load_camera_file
-from ..sidecar import SidecarError, display_path
-from ..storage import location
-from ..tables import FORMATS, TableWriter, format_from_extension
-from ..targets import Drawings
+from ..api.estimate import WALL_CHOICES
+from ..base.messages import one_line
+from ..batch.estimate_jobs import ESTIMATE_COLUMNS, EstimateJob, EstimateOptions, run_estimates
+from ..batch.rectify_jobs import worker_context
+from ..inputs.calibration import CalibrationError
+from ..inputs.records import load_camera_file
+from ..inputs.sidecar import SidecarError, display_path
+from ..io.storage import location
+from ..io.targets import Drawings
+from ..tables.writer import FORMATS, TableWriter, format_from_extension
 from .options import (
     MAX_JOBS,
     VIEW_OPTIONS,
@@ -174,7 +175,7 @@ def estimate(inputs: tuple[str, ...], output: str | None, fmt: str | None, recur
 
         try:
             run_estimates(job_list, options, jobs or os.cpu_count() or 1, on_row,
-                          picture_root=draw, fork_from_caller=fork_workers,
+                          picture_root=draw, context=worker_context(fork_workers),
                           on_progress=lambda: progress.update(1))
         except (KeyboardInterrupt, Terminated) as stop:
             stopped = stop  # every job has its row: the table is still written whole

@@ -8,11 +8,11 @@ from typing import Any
 
 import click
 
-from ..gaze import GazeTargetError, gaze_at, track_steps
-from ..messages import quote
-from ..numerals import parse_decimal
-from ..report import GAZE_COLUMNS, TRACK_COLUMNS
-from ..tables import write_table
+from ..base.messages import quote
+from ..base.numerals import parse_decimal
+from ..geometry.gaze import GazeTargetError, gaze_at, track_steps
+from ..tables.rows import GAZE_COLUMNS, TRACK_COLUMNS
+from ..tables.writer import write_table
 from .options import (
     InputError,
     Number,

@@ -12,9 +12,21 @@ from typing import Any
 import click
 import numpy as np
 
-from ..canonical import CanonicalView, canonical_views
-from ..imaging import ImageError, read_image
-from ..landmarks import (
+from ..base.messages import quote
+from ..base.numerals import parse_decimal
+from ..batch.canonical_views import CanonicalView, canonical_views
+from ..imaging.images import ImageError, encode_image, read_image
+from ..inputs.sources import sources_from_directory
+from ..io.storage import Location
+from ..io.targets import Drawings
+from ..tables.rows import LINES_COLUMNS, MATCH_COLUMNS, line_row, match_row
+from ..tables.writer import TableWriter
+from ..vision.drawing import draw_lines, draw_matches
+from ..vision.edges import DEFAULT_LINE_THRESHOLD, line_edges
+from ..vision.frontal_pixels import frontal_edges
+from ..vision.ght import DEFAULT_MATCH_THRESHOLD
+from ..vision.hough import DEFAULT_MAX_GAP, DEFAULT_MIN_LENGTH, ORIENTATIONS
+from ..vision.landmarks import (
     DEFAULT_MIN_VOTES,
     DEFAULT_THETA_STEP_DEG,
     EdgeMap,
@@ -25,18 +37,6 @@ from ..landmarks import (
     hough_lines,
     match_template,
 )
-from ..landmarks.drawing import draw_lines, draw_matches
-from ..landmarks.edges import DEFAULT_LINE_THRESHOLD, line_edges
-from ..landmarks.frontal import frontal_edges
-from ..landmarks.ght import DEFAULT_MATCH_THRESHOLD
-from ..landmarks.hough import DEFAULT_MAX_GAP, DEFAULT_MIN_LENGTH, ORIENTATIONS
-from ..messages import quote
-from ..numerals import parse_decimal
-from ..report import LINES_COLUMNS, MATCH_COLUMNS, line_row, match_row
-from ..sources import sources_from_directory
-from ..storage import Location
-from ..tables import TableWriter
-from ..targets import Drawings
 from .options import (
     InputError,
     Integer,
@@ -101,7 +101,7 @@ def _save_drawing(drawings: Drawings, target: Path, view: CanonicalView,
                   overlay: np.ndarray) -> bool:
     """Write one picture; False (and one error line) when it could not be written."""
     try:
-        drawings.save(target, overlay)
+        drawings.save(target, encode_image(overlay, ".png"))
     except (OSError, ValueError, ImageError) as error:
         reason = getattr(error, "strerror", None) or error
         report_error(f"{view.path}: --draw {target}: {reason}")

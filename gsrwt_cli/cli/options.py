@@ -15,24 +15,24 @@ from typing import TYPE_CHECKING, Any, TypeVar
 
 import click
 
-from ..bounds import VIEW_FIELDS
-from ..messages import one_line, quote
-from ..numerals import parse_decimal, parse_whole
-from ..storage import Location, location
-from ..tables import FORMATS
+from ..base.messages import one_line, quote
+from ..base.numerals import parse_decimal, parse_whole
+from ..geometry.bounds import VIEW_FIELDS
+from ..io.storage import Location, location
+from ..tables.writer import FORMATS
 
 if TYPE_CHECKING:
-    from ..camera import View
-    from ..records import RecordError
-    from ..sidecar import Sidecar
-    from ..targets import TargetError
+    from ..geometry.camera import View
+    from ..inputs.records import RecordError
+    from ..inputs.sidecar import Sidecar
+    from ..io.targets import TargetError
 
 F = TypeVar("F", bound=Callable[..., Any])
 
 
 class PathOrUrl(click.Path):
     """A path (a :class:`~pathlib.Path`, checked as ``click.Path`` checks it) or a URL
-    such as ``s3://bucket/run1/`` (a :class:`~gsrwt_cli.storage.Location`, checked by its
+    such as ``s3://bucket/run1/`` (a :class:`~gsrwt_cli.io.storage.Location`, checked by its
     store when used); ``file://`` URLs are paths."""
 
     def __init__(self, **kwargs: Any) -> None:
@@ -72,7 +72,7 @@ class _AsciiNumber:
 
 
 class Integer(_AsciiNumber, click.IntRange):
-    """A whole-number option (:func:`~gsrwt_cli.numerals.parse_whole`), within ``min`` and
+    """A whole-number option (:func:`~gsrwt_cli.base.numerals.parse_whole`), within ``min`` and
     ``max`` if given."""
 
     name = "integer"
@@ -80,7 +80,7 @@ class Integer(_AsciiNumber, click.IntRange):
 
 
 class Number(_AsciiNumber, click.FloatRange):
-    """A number option: a finite decimal (:func:`~gsrwt_cli.numerals.parse_decimal`), within
+    """A number option: a finite decimal (:func:`~gsrwt_cli.base.numerals.parse_decimal`), within
     ``min`` and ``max`` if given."""
 
     name = "float"
@@ -123,7 +123,7 @@ def report_error(message: str) -> None:
 
 def view_from_options(values: dict[str, Any]) -> View:
     """The one view the view options describe, or an :class:`InputError` naming the option."""
-    from ..records import RecordError, view_from_values
+    from ..inputs.records import RecordError, view_from_values
 
     try:
         return view_from_values(values, "options")
@@ -136,7 +136,7 @@ def load_sidecar_option(sidecar: Path | None) -> Sidecar | None:
     :class:`InputError` saying what is wrong with the file."""
     if sidecar is None:
         return None
-    from ..sidecar import SidecarError, load_sidecar
+    from ..inputs.sidecar import SidecarError, load_sidecar
 
     try:
         return load_sidecar(sidecar)
@@ -151,10 +151,10 @@ def prepare_directory(directory: Path | Location, what: str) -> None:
     raise InputError starting with ``what`` (the option and the name the user gave).
 
     On an object store, a probe object is written and removed below the prefix
-    (:func:`~gsrwt_cli.storage.check_writable`): a missing bucket, refused credentials or an
+    (:func:`~gsrwt_cli.io.storage.check_writable`): a missing bucket, refused credentials or an
     unreachable endpoint are found here, before any work."""
     if isinstance(directory, Location):
-        from ..storage import check_writable
+        from ..io.storage import check_writable
 
         try:
             check_writable(directory)
@@ -193,7 +193,7 @@ def prepare_table(name: str, option: str) -> None:
 def target_message(error: TargetError, option: str | None = None) -> str:
     """A refused output in the user's terms: ``option`` is the flag that named the file, if
     one did; an existing file tells how to replace it."""
-    from ..targets import (  # only when something was refused: not on every start-up
+    from ..io.targets import (  # only when something was refused: not on every start-up
         DirectoryTargetError,
         ExistingOutputError,
         InputOverwriteError,
@@ -218,8 +218,8 @@ def target_message(error: TargetError, option: str | None = None) -> str:
 def make_output_directory(option: str, directory: Path) -> None:
     """Create the output directory the user named and prove it writable, or stop with one
     line saying why not."""
-    from ..targets import TargetError
-    from ..targets import make_output_directory as create_directory
+    from ..io.targets import TargetError
+    from ..io.targets import make_output_directory as create_directory
 
     try:
         create_directory(directory)
@@ -247,7 +247,7 @@ def resolve_format(fmt: str | None) -> str:
     return "table" if sys.stdout.isatty() else "csv"
 
 
-#: The view options: type and help of each of :data:`~gsrwt_cli.camera.VIEW_FIELDS`.
+#: The view options: type and help of each of :data:`~gsrwt_cli.geometry.camera.VIEW_FIELDS`.
 VIEW_OPTIONS: dict[str, tuple[type, str]] = {
     "pan": (float, "Pan in degrees, positive turns left."),
     "tilt": (float, "Tilt in degrees, positive tilts up."),
@@ -277,7 +277,7 @@ def field_options(fields: dict[str, tuple[type, str]], camera_help: str) -> Call
 
 
 #: ``--pan --tilt --roll --focal --fx --fy --cx --cy --skew --width --height --distance``
-#: and ``--camera``: one option for each field of :data:`~gsrwt_cli.camera.VIEW_FIELDS`.
+#: and ``--camera``: one option for each field of :data:`~gsrwt_cli.geometry.camera.VIEW_FIELDS`.
 view_options = field_options(
     {name: VIEW_OPTIONS[name] for name in VIEW_FIELDS},
     "Calibration file (OpenCV YAML/XML or ROS camera_info) with the intrinsics and lens; the "
@@ -286,7 +286,7 @@ view_options = field_options(
 
 def interpolation_option(func: F) -> F:
     """``--interpolation``: how output pixels are sampled from the input."""
-    from ..imaging import INTERPOLATIONS
+    from ..imaging.images import INTERPOLATIONS
 
     return click.option("--interpolation", type=click.Choice(tuple(INTERPOLATIONS)),
                         default="linear", show_default=True)(func)
@@ -303,7 +303,7 @@ def edge_threshold_option(func: F, default: float | None = None,
     """``--edge-threshold``: the Sobel magnitude of an edge pixel (lines, match); ``default``
     None is the thesis's raw threshold."""
     if default is None:
-        from ..landmarks import DEFAULT_EDGE_THRESHOLD
+        from ..vision.landmarks import DEFAULT_EDGE_THRESHOLD
 
         default = DEFAULT_EDGE_THRESHOLD
     return click.option("--edge-threshold", type=Number(min=0, min_open=True),

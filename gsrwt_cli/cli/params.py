@@ -42,26 +42,26 @@ def params(sidecar: Path | None, fmt: str | None, **kwargs: Any) -> None:
       gsrwt params --pan 15 --tilt 30 --focal 280 --width 320 --height 240
       gsrwt params --sidecar sample_data/views/views.csv --format json
     """
-    from ..tables import TableWriter
+    from ..tables.writer import TableWriter
 
     defaults = view_defaults(kwargs)
     fmt = resolve_format(fmt)
     if sidecar is None:
-        from ..pinhole import PARAMS_COLUMNS, pinhole_numbers, pinhole_params_row
+        from ..geometry.pinhole import PARAMS_COLUMNS, pinhole_numbers, pinhole_params_row
 
         numbers = pinhole_numbers(defaults, "options")  # a plain pinhole: no numpy to load
         row = None if numbers is None else pinhole_params_row(numbers)
         if row is None:
-            from ..report import params_row
+            from ..tables.rows import params_row
 
             row = params_row(view_from_options(defaults))
         writer = TableWriter(sys.stdout, PARAMS_COLUMNS, fmt)
         writer.write_row(row)
         writer.close()
         return
-    from ..records import RecordError
-    from ..report import PARAMS_COLUMNS, ParamsBlock, params_block, params_row, params_rows
-    from ..sidecar import SidecarError, iter_sidecar_chunks
+    from ..inputs.records import RecordError
+    from ..inputs.sidecar import SidecarError, iter_sidecar_chunks
+    from ..tables.rows import PARAMS_COLUMNS, ParamsBlock, params_block, params_row, params_rows
 
     chunks = iter_sidecar_chunks(sidecar)
     try:

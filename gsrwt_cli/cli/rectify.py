@@ -24,7 +24,12 @@ from typing import IO, Any
 import click
 from tqdm import tqdm
 
-from ..batch import (
+from ..api.estimate import WALL_CHOICES
+from ..api.rectify import MissingDistanceError
+from ..base.messages import one_line, quote
+from ..base.numerals import parse_decimal, parse_whole
+from ..batch.estimate_jobs import EstimateOptions
+from ..batch.rectify_jobs import (
     RECTIFY_COLUMNS,
     Counts,
     ImageWorker,
@@ -38,35 +43,30 @@ from ..batch import (
     settings_for_elsewhere,
     worker_context,
 )
-from ..calibration import CalibrationError
-from ..estimate import WALL_CHOICES
-from ..estimation import EstimateOptions
-from ..framing import (
+from ..geometry.framing import (
     EmptyOutputError,
     FrameOutsideImageError,
     NothingWithinStretchError,
     OutputTooLargeError,
 )
-from ..imaging import (
+from ..imaging.images import (
     INTERPOLATIONS,
     ImageError,
     ImageFormatError,
     canonical_extension,
     check_writable,
 )
-from ..messages import one_line, quote
-from ..numerals import parse_decimal, parse_whole
-from ..outputs import open_atomic, remove_stale_temporaries
-from ..records import load_camera_file
-from ..rectify import MissingDistanceError
-from ..sources import (
+from ..inputs.calibration import CalibrationError
+from ..inputs.records import load_camera_file
+from ..inputs.sources import (
     Source,
     source_from_listed_path,
     sources_from_directory,
     sources_from_location,
 )
-from ..storage import Location, location
-from ..tables import (
+from ..io.outputs import open_atomic, remove_stale_temporaries
+from ..io.storage import Location, location
+from ..tables.writer import (
     TableWriter,
     format_from_extension,
     parse_shard,
@@ -260,7 +260,7 @@ def either(remedies: list[str]) -> str:
 @dataclass(frozen=True)
 class RectifyWording:
     """Words the core's errors in terms of one ``gsrwt rectify`` run's options, naming only
-    remedies not already in use (an instance is :class:`~gsrwt_cli.batch.Settings`'s
+    remedies not already in use (an instance is :class:`~gsrwt_cli.batch.rectify_jobs.Settings`'s
     ``describe``; it is pickled to the workers).
 
     ``bbox``: frontal, full, crop, or box (X0,Y0,X1,Y1); ``metric``: the scale comes from
@@ -426,12 +426,12 @@ def open_table(path: str) -> Iterator[IO[str]]:
 @contextlib.contextmanager
 def dask_executor(address: str, processes: int, retries: int,
                   settings: Settings) -> Iterator[Any]:
-    """A :class:`~gsrwt_cli.dask_executor.DaskExecutor` on the scheduler at ``address``
+    """A :class:`~gsrwt_cli.batch.dask_executor.DaskExecutor` on the scheduler at ``address``
     (``local``: a local cluster of ``processes`` workers), or an :class:`InputError` saying
     how to install Dask or that the scheduler cannot be reached."""
     os.environ.setdefault("DASK_LOGGING__DISTRIBUTED", "error")  # workers inherit it
     try:
-        from .. import dask_executor as engine
+        from ..batch import dask_executor as engine
     except ImportError as error:
         raise InputError(f"--scheduler {address}: needs Dask ({error.msg}); install it with "
                          "pip install 'gsrwt[dask]'") from None

@@ -8,11 +8,11 @@ from typing import Any
 
 import click
 
-from ..imaging import ImageError, read_image
-from ..records import RecordError
-from ..render import plan_one_view, plan_views, render_views, write_views_sidecar
-from ..sidecar import SidecarError, load_sidecar
-from ..targets import NotADirectoryTargetError, TargetError, UncreatableDirectoryError
+from ..batch.render_jobs import plan_one_view, plan_views, render_views, write_views_sidecar
+from ..imaging.images import ImageError, read_image
+from ..inputs.records import RecordError
+from ..inputs.sidecar import SidecarError, load_sidecar
+from ..io.targets import NotADirectoryTargetError, TargetError, UncreatableDirectoryError
 from .options import (
     InputError,
     LocalPath,

@@ -10,10 +10,10 @@ from typing import IO
 
 import click
 
-from ..messages import quote
-from ..outputs import open_atomic
-from ..storage import Location, location
-from ..tables import (
+from ..base.messages import quote
+from ..io.outputs import open_atomic
+from ..io.storage import Location, location
+from ..tables.writer import (
     FLAG,
     MATRIX,
     NAME,
@@ -34,8 +34,8 @@ MACHINE_FORMATS = ("csv", "tsv", "json", "jsonl")
 
 def rectify_table() -> TableSchema:
     """The table ``gsrwt rectify`` writes, each of its columns with what its cells hold."""
-    from ..batch import RECTIFY_COLUMNS  # with OpenCV: only when a table is merged
-    from ..pinhole import PARAMS_COLUMNS
+    from ..batch.rectify_jobs import RECTIFY_COLUMNS  # with OpenCV: only when a table is merged
+    from ..geometry.pinhole import PARAMS_COLUMNS
 
     kinds = {name: NUMBER for name in (*PARAMS_COLUMNS, "confidence", "scale")}
     kinds.update(image=NAME, horizon_in_image=FLAG, out_width=POSITIVE_WHOLE,

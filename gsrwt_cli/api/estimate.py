@@ -1,0 +1,604 @@
+"""Pan, tilt and roll from the image's own straight lines (spec section 7, thesis future work 1).
+
+>>> estimate = estimate_pose(image, Intrinsics(500, 500, width=640, height=480))  # doctest: +SKIP
+>>> estimate.pose.pan, estimate.confidence  # doctest: +SKIP
+
+Steps (no I/O, nothing printed; arrays in, degrees out):
+
+1. straight segments by OpenCV's LSD (:func:`detect_segments`), their end points undistorted
+   when the camera has a lens (never the image);
+2. each segment's interpretation plane ``n = r1 x r2`` through its end rays (spec section 7);
+3. the Manhattan frame (three orthogonal directions) by a minimal-sample search: two segments
+   give a direction ``v1 = n1 x n2``, a third gives ``v2 = v1 x n3``, ``v3 = v1 x v2``; each
+   hypothesis is scored by a truncated quadratic of the segments' end-point distances, then
+   the best is refined by robust Gauss-Newton over its inliers (:func:`fit_manhattan_frame`);
+4. the vertical (the direction nearest the image's up), the wall (the horizontal nearest the
+   optical axis, so ``|pan| <= 45``) and the pose by spec section 6's decomposition.
+
+Unknown focal length: the clusters' vanishing points do not depend on it; two finite
+orthogonal ones ``p1, p2`` give ``f^2 = -(p1 - c).(p2 - c)`` (spec section 7), and the frame
+is fitted again with that focal length.
+
+Frames: the thesis's camera frame (X up, Y right, Z forward; spec section 1); pixels
+``(col, row)`` with pixel centres at integers.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import cv2
+import numpy as np
+
+from ..geometry.camera import Intrinsics, Pose, View
+from ..geometry.framing import lens_distortion
+from ..geometry.rotations import PoseError, pose_from_rotation
+from ..vision.edges import grey8
+
+#: Segments shorter than this fraction of the image's diagonal are left out (noise, texture).
+MIN_SEGMENT_FRACTION = 0.02
+#: Fewer segments than this: nothing can be told.
+MIN_SEGMENTS = 8
+#: A direction is "found" when at least this many segments (and this fraction of them) meet in it.
+MIN_DIRECTION_SEGMENTS = 5
+MIN_DIRECTION_FRACTION = 0.04
+#: End-point distance (pixels at 640x480) within which a segment belongs to a direction.
+INLIER_PX = 1.5
+#: Scale of the Cauchy weights of the refinement, as a fraction of the inlier distance.
+CAUCHY_FRACTION = 0.25
+#: Hypotheses of the minimal-sample search, and the segments they are drawn from (the longest).
+HYPOTHESES = 600
+SAMPLED_SEGMENTS = 120
+#: Segments (the longest) that score the hypotheses; all of them are refined.
+SCORED_SEGMENTS = 200
+#: At most this many segments (the longest) are fitted.
+MAX_SEGMENTS = 500
+#: LSD's own Gaussian down-scaling (OpenCV's default 0.8): 0.6 finds the long edges in
+#: half the time.
+LSD_SCALE = 0.6
+#: Images are searched for segments at most this many pixels on their long side.
+MAX_DETECTION_SIDE = 1280
+#: Focal lengths (multiples of the long side) at which an unknown camera's frame is searched
+#: first, with fewer hypotheses each.
+FOCAL_GRID = tuple(0.4 * 1.25**k for k in range(10))
+GRID_HYPOTHESES = 300
+#: Focal lengths an image may be found to have, as multiples of its diagonal.
+FOCAL_RANGE = (0.2, 10.0)
+#: Vanishing points further than this many diagonals from the principal point are
+#: "at infinity" for the focal length formula.
+FINITE_VP_DIAGONALS = 8.0
+#: Support (inlier segments) of a direction at which its part of the confidence is 1 - 1/e.
+CONFIDENCE_SEGMENTS = 8.0
+
+#: Which vertical plane is the wall (:func:`world_from_camera_of`).
+WALL_CHOICES = ("frontal", "dominant")
+
+#: Names of the three directions, in the order of :attr:`PoseEstimate.vanishing_points`.
+DIRECTION_NAMES = ("vertical", "wall", "normal")
+
+
+@dataclass(frozen=True)
+class PoseEstimate:
+    """What :func:`estimate_pose` found in one image.
+
+    ``pose``: the :class:`~gsrwt_cli.geometry.camera.Pose` (None when ``error`` says why not);
+    ``focal``: the focal length in pixels used (given, or estimated when
+    ``focal_estimated``); ``confidence`` in [0, 1] (see :func:`confidence_of`); ``segments``:
+    straight segments fitted; ``inliers``: those that meet in one of the three directions;
+    ``directions``: how many of the three directions segments were found for;
+    ``vanishing_points``: ``(col, row)`` in ideal (undistorted) pixels of the vertical, the
+    wall's horizontal and the wall's normal, None where at infinity; ``world_from_camera``:
+    the rotation (rows: up, wall-right, into-wall in the camera frame); ``lines``: ``(N, 4)``
+    segment end points ``col1, row1, col2, row2`` as detected; ``labels``: ``(N,)`` the
+    direction of each (0, 1, 2 as in :data:`DIRECTION_NAMES`, -1 for none).
+    """
+
+    pose: Pose | None
+    focal: float | None
+    focal_estimated: bool
+    confidence: float
+    segments: int
+    inliers: int
+    directions: int
+    vanishing_points: tuple[tuple[float, float] | None, ...] = (None, None, None)
+    world_from_camera: np.ndarray | None = field(default=None, repr=False)
+    lines: np.ndarray = field(default_factory=lambda: np.zeros((0, 4)), repr=False)
+    labels: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int), repr=False)
+    error: str | None = None
+
+    @property
+    def ok(self) -> bool:
+        return self.error is None
+
+
+class EstimateError(ValueError):
+    """The image cannot tell its pose (``estimate_pose`` returns these as ``error``)."""
+
+
+# --------------------------------------------------------------------------------------------
+# Segments and their interpretation planes
+# --------------------------------------------------------------------------------------------
+
+
+def detect_segments(image: np.ndarray, min_length: float | None = None) -> np.ndarray:
+    """Straight segments by OpenCV's LSD: ``(N, 4)`` ``col1, row1, col2, row2``, longest first.
+
+    Large images are searched at most :data:`MAX_DETECTION_SIDE` pixels on their long side
+    (coordinates given back in the image's pixels). Segments shorter than ``min_length``
+    (default :data:`MIN_SEGMENT_FRACTION` of the diagonal) are left out; at most
+    :data:`MAX_SEGMENTS` are kept.
+    """
+    grey = grey8(np.asarray(image))
+    height, width = grey.shape
+    if min_length is None:
+        min_length = max(8.0, MIN_SEGMENT_FRACTION * math.hypot(width, height))
+    factor = min(1.0, MAX_DETECTION_SIDE / max(width, height))
+    small = grey if factor == 1.0 else cv2.resize(
+        grey, (max(1, round(width * factor)), max(1, round(height * factor))),
+        interpolation=cv2.INTER_AREA)
+    detector = cv2.createLineSegmentDetector(cv2.LSD_REFINE_STD, LSD_SCALE)
+    found = detector.detect(small)[0]
+    if found is None:
+        return np.zeros((0, 4))
+    lines = found.reshape(-1, 4).astype(np.float64)
+    if factor != 1.0:
+        sx, sy = width / small.shape[1], height / small.shape[0]
+        lines = (lines + 0.5) * np.array([sx, sy, sx, sy]) - 0.5
+    lengths = np.hypot(lines[:, 2] - lines[:, 0], lines[:, 3] - lines[:, 1])
+    order = np.argsort(-lengths, kind="stable")
+    order = order[lengths[order] >= min_length][:MAX_SEGMENTS]
+    return lines[order]
+
+
+def interpretation_planes(
+    lines: np.ndarray, camera_from_pixel: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Unit normals ``(N, 3)`` of the segments' interpretation planes (spec section 7:
+    ``n = r1 x r2``) and their half lengths ``(N,)`` in pixels.
+
+    ``camera_from_pixel``: homogeneous ideal pixel ``(col, row, 1)`` to a ray in the thesis's
+    camera frame (X up, Y right, Z forward).
+    """
+    ones = np.ones((len(lines), 1))
+    r1 = np.hstack([lines[:, :2], ones]) @ camera_from_pixel.T
+    r2 = np.hstack([lines[:, 2:], ones]) @ camera_from_pixel.T
+    normals = np.cross(r1, r2)
+    norms = np.linalg.norm(normals, axis=1, keepdims=True)
+    half = 0.5 * np.hypot(lines[:, 2] - lines[:, 0], lines[:, 3] - lines[:, 1])
+    return normals / np.where(norms > 0, norms, 1.0), half
+
+
+# --------------------------------------------------------------------------------------------
+# The Manhattan frame
+# --------------------------------------------------------------------------------------------
+
+
+def _unit(vectors: np.ndarray) -> np.ndarray:
+    norms = np.linalg.norm(vectors, axis=-1, keepdims=True)
+    return vectors / np.where(norms > 0, norms, 1.0)
+
+
+def _rodrigues(omega: np.ndarray) -> np.ndarray:
+    return cv2.Rodrigues(np.asarray(omega, dtype=np.float64).reshape(3, 1))[0]
+
+
+@dataclass(frozen=True)
+class Frame:
+    """Three orthonormal directions (the columns of ``directions``, camera frame) and the
+    segments that meet in each (``labels``: 0, 1, 2, or -1)."""
+
+    directions: np.ndarray
+    labels: np.ndarray
+    score: float
+
+    def support(self) -> np.ndarray:
+        return np.bincount(self.labels[self.labels >= 0], minlength=3)
+
+
+def fit_manhattan_frame(
+    normals: np.ndarray, half_lengths: np.ndarray, inlier_px: float = INLIER_PX,
+    hypotheses: int = HYPOTHESES, seed: int = 0,
+) -> Frame:
+    """The three orthogonal directions that most segments meet in (spec section 7).
+
+    Convention
+    ----------
+    ``normals``: ``(N, 3)`` unit interpretation-plane normals, longest segments first;
+    ``half_lengths``: ``(N,)`` pixels. A segment meets direction ``v`` when its end points lie
+    within ``inlier_px`` of the line through its midpoint and ``v``'s vanishing point,
+    approximately ``half_length * |n.v| < inlier_px``.
+
+    The search draws ``hypotheses`` minimal samples (seeded: the same image gives the same
+    answer): ``v1 = n_i x n_j``, ``v2 = v1 x n_k``, ``v3 = v1 x v2``, scores each by
+    ``sum(length * max(0, 1 - (d / inlier_px)^2))`` over the segments' best direction, then
+    refines the best rotation by Gauss-Newton with Cauchy weights over the inliers,
+    re-assigning them as it goes.
+    """
+    count = len(normals)
+    rng = np.random.default_rng(seed)
+    pool = min(count, SAMPLED_SEGMENTS)
+    weights = half_lengths[:pool] / half_lengths[:pool].sum()
+    picks = rng.choice(pool, size=(hypotheses, 3), p=weights)
+    v1 = _unit(np.cross(normals[picks[:, 0]], normals[picks[:, 1]]))
+    v2 = _unit(np.cross(v1, normals[picks[:, 2]]))
+    v3 = np.cross(v1, v2)
+    good = (np.linalg.norm(v2, axis=1) > 0.5) & (picks[:, 0] != picks[:, 1])
+    candidates = np.stack([v1, v2, v3], axis=2)[good]  # (H, 3, 3): columns are directions
+    if len(candidates) == 0:
+        return Frame(np.eye(3), -np.ones(count, dtype=int), 0.0)
+    scores = _scores(normals, half_lengths, candidates, inlier_px)
+    best = candidates[int(np.argmax(scores))]
+    directions = _refine(normals, half_lengths, best, inlier_px)
+    labels, score = _labels(normals, half_lengths, directions, inlier_px)
+    return Frame(directions, labels, score)
+
+
+def _scores(normals: np.ndarray, half: np.ndarray, candidates: np.ndarray,
+            inlier_px: float) -> np.ndarray:
+    """Truncated-quadratic score of each candidate frame ``(H, 3, 3)`` over the longest
+    :data:`SCORED_SEGMENTS` segments (float32: a ranking, refined in float64 after)."""
+    count = min(len(normals), SCORED_SEGMENTS)
+    scaled = (normals[:count] * (half[:count, None] / inlier_px)).astype(np.float32)
+    weight = half[:count].astype(np.float32)
+    scores = np.zeros(len(candidates))
+    for start in range(0, len(candidates), 500):  # bounded memory: N x 500 x 3 at a time
+        block = candidates[start:start + 500].astype(np.float32)
+        flat = block.transpose(1, 0, 2).reshape(3, -1)  # (3, h*3)
+        distance = np.abs(scaled @ flat).reshape(count, len(block), 3).min(axis=2)
+        np.square(distance, out=distance)
+        np.subtract(1.0, distance, out=distance)
+        np.maximum(distance, 0.0, out=distance)
+        scores[start:start + 500] = weight @ distance
+    return scores
+
+
+def _labels(normals: np.ndarray, half: np.ndarray, directions: np.ndarray,
+            inlier_px: float) -> tuple[np.ndarray, float]:
+    distance = np.abs(normals @ directions) * half[:, None] / inlier_px
+    labels = np.argmin(distance, axis=1)
+    nearest = distance[np.arange(len(labels)), labels]
+    score = float((half * np.maximum(0.0, 1.0 - nearest**2)).sum())
+    return np.where(nearest < 1.0, labels, -1), score
+
+
+def _refine(normals: np.ndarray, half: np.ndarray, directions: np.ndarray,
+            inlier_px: float, iterations: int = 8,
+            fixed_labels: np.ndarray | None = None) -> np.ndarray:
+    """Gauss-Newton on the rotation: residual ``half * n.v_k`` (about the end-point distance
+    in pixels) of each inlier, Cauchy-weighted, the rotation updated as ``exp([w]x) R``.
+    Inliers are re-assigned each iteration, unless ``fixed_labels`` gives them."""
+    directions = np.linalg.svd(directions)[0] @ np.linalg.svd(directions)[2]
+    for iteration in range(iterations):
+        if fixed_labels is None:
+            gate = inlier_px * (2.0 if iteration < 2 else 1.0)
+            distance = np.abs(normals @ directions) * half[:, None]
+            labels = np.argmin(distance, axis=1)
+            inliers = distance[np.arange(len(labels)), labels] < gate
+        else:
+            labels, inliers = np.maximum(fixed_labels, 0), fixed_labels >= 0
+        if inliers.sum() < 3:
+            break
+        n, k, s = normals[inliers], labels[inliers], half[inliers]
+        v = directions[:, k].T  # (M, 3)
+        residual = s * np.einsum("ij,ij->i", n, v)
+        jacobian = s[:, None] * np.cross(v, n)
+        weight = 1.0 / (1.0 + (residual / (CAUCHY_FRACTION * inlier_px)) ** 2)
+        normal_matrix = (jacobian * weight[:, None]).T @ jacobian
+        damping = 1e-6 * np.trace(normal_matrix) + 1e-12
+        step = np.linalg.solve(normal_matrix + damping * np.eye(3),
+                               -(jacobian * weight[:, None]).T @ residual)
+        directions = _rodrigues(step) @ directions
+        if np.linalg.norm(step) < 1e-9:
+            break
+    return directions
+
+
+def _image_cost(lines: np.ndarray, pixel_from_camera: np.ndarray, directions: np.ndarray,
+                labels: np.ndarray, inlier_px: float) -> float:
+    """Cauchy cost of the segments of ``labels``: the distance in pixels of each segment's end
+    point from the line through its midpoint and its direction's vanishing point."""
+    inliers = labels >= 0
+    segments = lines[inliers]
+    points = (pixel_from_camera @ directions[:, labels[inliers]]).T  # homogeneous VPs
+    mid = np.column_stack([(segments[:, :2] + segments[:, 2:]) / 2, np.ones(len(segments))])
+    through = np.cross(mid, points)
+    through /= np.maximum(np.hypot(through[:, 0], through[:, 1]), 1e-300)[:, None]
+    distance = np.abs(through[:, 0] * segments[:, 0] + through[:, 1] * segments[:, 1]
+                      + through[:, 2])
+    return float(np.log1p((distance / (CAUCHY_FRACTION * inlier_px)) ** 2).sum())
+
+
+def image_score(lines: np.ndarray, pixel_from_camera: np.ndarray, directions: np.ndarray,
+                inlier_px: float) -> float:
+    """The frame's score measured in the image, comparable between focal lengths:
+    ``sum(length * max(0, 1 - (d / inlier_px)^2))`` with ``d`` each segment's end-point
+    distance from the line through its midpoint and the nearest of the three vanishing
+    points (in pixels, whatever the focal length)."""
+    points = pixel_from_camera @ directions  # (3, 3): the homogeneous VPs, as columns
+    mid = np.column_stack([(lines[:, :2] + lines[:, 2:]) / 2, np.ones(len(lines))])
+    best = np.full(len(lines), np.inf)
+    for k in range(3):
+        through = np.cross(mid, points[:, k])
+        through /= np.maximum(np.hypot(through[:, 0], through[:, 1]), 1e-300)[:, None]
+        distance = np.abs(through[:, 0] * lines[:, 0] + through[:, 1] * lines[:, 1]
+                          + through[:, 2])
+        best = np.minimum(best, distance)
+    lengths = np.hypot(lines[:, 2] - lines[:, 0], lines[:, 3] - lines[:, 1])
+    return float((lengths * np.maximum(0.0, 1.0 - (best / inlier_px) ** 2)).sum())
+
+
+def polish_focal(ideal: np.ndarray, centre: np.ndarray, focal: float, inlier_px: float,
+                 span: float = 1.4, iterations: int = 14) -> float:
+    """The focal length within ``span`` times ``focal`` at which the segments fit a Manhattan
+    frame best: a golden-section search of the refined Cauchy cost, the inliers held fixed.
+
+    The vanishing-point formula (:func:`focal_from_vanishing_points`) uses two clusters; this
+    weighs every segment of all three, which matters when one vanishing point is far away.
+    """
+    def planes(f: float) -> tuple[np.ndarray, np.ndarray]:
+        camera = Intrinsics(f, f, centre[0], centre[1])
+        return interpretation_planes(ideal, _camera_from_pixel(camera))
+
+    normals, half = planes(focal)
+    frame = fit_manhattan_frame(normals, half, inlier_px)
+    if (frame.support() >= MIN_DIRECTION_SEGMENTS).sum() < 2:
+        return focal
+    start = frame.directions
+
+    def cost(log_focal: float) -> float:
+        f = math.exp(log_focal)
+        normals_f, half_f = planes(f)
+        directions = _refine(normals_f, half_f, start, inlier_px, 4, frame.labels)
+        pixel_from_camera = np.linalg.inv(_camera_from_pixel(Intrinsics(f, f, *centre)))
+        return _image_cost(ideal, pixel_from_camera, directions, frame.labels, inlier_px)
+
+    low, high = math.log(focal / span), math.log(focal * span)
+    ratio = (math.sqrt(5.0) - 1.0) / 2.0
+    a, b = high - ratio * (high - low), low + ratio * (high - low)
+    cost_a, cost_b = cost(a), cost(b)
+    for _ in range(iterations):
+        if cost_a < cost_b:
+            high, b, cost_b = b, a, cost_a
+            a = high - ratio * (high - low)
+            cost_a = cost(a)
+        else:
+            low, a, cost_a = a, b, cost_b
+            b = low + ratio * (high - low)
+            cost_b = cost(b)
+    return math.exp((low + high) / 2.0)
+
+
+# --------------------------------------------------------------------------------------------
+# Vanishing points, the focal length, the wall and the pose
+# --------------------------------------------------------------------------------------------
+
+
+def cluster_vanishing_point(lines: np.ndarray, centre: np.ndarray, scale: float) -> np.ndarray:
+    """The homogeneous point ``(col, row, w)`` nearest, in least squares, to all the segments'
+    lines (weighted by length): the smallest right singular vector of their stacked lines, in
+    pixels centred on ``centre`` and divided by ``scale`` for conditioning."""
+    ones = np.ones((len(lines), 1))
+    p1 = np.hstack([(lines[:, :2] - centre) / scale, ones])
+    p2 = np.hstack([(lines[:, 2:] - centre) / scale, ones])
+    homogeneous = np.cross(p1, p2)
+    homogeneous /= np.linalg.norm(homogeneous[:, :2], axis=1, keepdims=True)
+    lengths = np.hypot(lines[:, 2] - lines[:, 0], lines[:, 3] - lines[:, 1])
+    point = np.linalg.svd(homogeneous * np.sqrt(lengths)[:, None])[2][-1]
+    return np.array([point[0] * scale + centre[0] * point[2],
+                     point[1] * scale + centre[1] * point[2], point[2]])
+
+
+def focal_from_vanishing_points(
+    points: list[np.ndarray], centre: np.ndarray, diagonal: float
+) -> float | None:
+    """``f = sqrt(-(p1 - c).(p2 - c))`` (spec section 7) from the best-conditioned pair of
+    finite vanishing points (homogeneous pixels) of orthogonal directions; None if none gives
+    a focal length within :data:`FOCAL_RANGE` diagonals."""
+    finite = []
+    for point in points:
+        if point is None or abs(point[2]) < 1e-12:
+            continue
+        offset = point[:2] / point[2] - centre
+        if np.linalg.norm(offset) < FINITE_VP_DIAGONALS * diagonal:
+            finite.append(offset)
+    best: tuple[float, float] | None = None
+    for i in range(len(finite)):
+        for j in range(i + 1, len(finite)):
+            square = -float(finite[i] @ finite[j])
+            if square <= 0:
+                continue
+            focal = math.sqrt(square)
+            if not FOCAL_RANGE[0] * diagonal <= focal <= FOCAL_RANGE[1] * diagonal:
+                continue
+            spread = max(np.linalg.norm(finite[i]), np.linalg.norm(finite[j])) / focal
+            if best is None or spread < best[0]:
+                best = (spread, focal)
+    return None if best is None else best[1]
+
+
+def world_from_camera_of(
+    directions: np.ndarray, support: np.ndarray | None = None, wall: str = "frontal"
+) -> tuple[np.ndarray, tuple[int, int, int]]:
+    """The rotation (rows: up, wall-right, into-wall in the camera frame) of a Manhattan frame.
+
+    The vertical is the direction nearest the camera's up axis (X), turned to point up. The
+    wall (spec section 7, ``wall="frontal"``) is the vertical plane most frontal to the
+    camera: its normal is the horizontal direction nearest the optical axis (Z), turned into
+    the wall, so ``|pan| <= 45``; wall-right is ``into x up``. ``wall="dominant"``: the
+    vertical plane with the more horizontal edges instead (``support``: the segments' length
+    per direction), whatever its pan: a facade photographed at 55 degrees, not the sliver of
+    the building's end. Returns the rotation and which columns of ``directions`` became
+    (vertical, wall horizontal, normal).
+    """
+    vertical = int(np.argmax(np.abs(directions[0])))
+    others = [k for k in range(3) if k != vertical]
+    normal = max(others, key=lambda k: abs(directions[2, k]))
+    along = others[0] if others[1] == normal else others[1]
+    if wall == "dominant" and support is not None and support[normal] > support[along]:
+        normal, along = along, normal
+    return _rotation_of(directions, vertical, along, normal), (vertical, along, normal)
+
+
+def _rotation_of(directions: np.ndarray, vertical: int, along: int, normal: int) -> np.ndarray:
+    """Rows up, wall-right (``into x up``), into-wall from three columns of ``directions``."""
+    up = directions[:, vertical] * np.sign(directions[0, vertical] or 1.0)
+    into = directions[:, normal] * np.sign(directions[2, normal] or 1.0)
+    right = np.cross(into, up)
+    u, _, vt = np.linalg.svd(np.vstack([up, right, into]))
+    return u @ vt
+
+
+def confidence_of(frame: Frame, half_lengths: np.ndarray) -> float:
+    """How much the image says for its frame, 0 to 1: the fraction of the segments' length
+    that meets in the frame, times ``1 - exp(-n / 8)`` for each of its two best-supported
+    directions (``n`` their segments). A wall with a dozen vertical and a dozen horizontal
+    edges and little else scores about 0.8; a few stray segments score near 0."""
+    inlier_fraction = float(half_lengths[frame.labels >= 0].sum() / half_lengths.sum())
+    support = np.sort(frame.support())[::-1]
+    factor = np.prod(1.0 - np.exp(-support[:2] / CONFIDENCE_SEGMENTS))
+    return float(np.clip(inlier_fraction * factor, 0.0, 1.0))
+
+
+def _camera_from_pixel(intrinsics: Intrinsics) -> np.ndarray:
+    """Homogeneous ideal pixel to a camera-frame ray (``K^-1`` in the thesis's frame)."""
+    focal = intrinsics.focal
+    return np.diag([1.0 / focal, 1.0 / focal, 1.0]) @ intrinsics.image_from_pixel()
+
+
+def _failure(reason: str, lines: np.ndarray, segments: int, directions: int = 0,
+             focal: float | None = None, estimated: bool = False,
+             labels: np.ndarray | None = None) -> PoseEstimate:
+    return PoseEstimate(
+        None, focal, estimated, 0.0, segments, 0 if labels is None else int((labels >= 0).sum()),
+        directions, lines=lines,
+        labels=-np.ones(len(lines), dtype=int) if labels is None else labels, error=reason)
+
+
+def estimate_pose(
+    image: np.ndarray,
+    camera: Intrinsics | None = None,
+    *,
+    principal_point: tuple[float, float] | None = None,
+    lines: np.ndarray | None = None,
+    wall: str = "frontal",
+) -> PoseEstimate:
+    """Pan, tilt and roll of the camera that took ``image``, from its straight lines.
+
+    Convention
+    ----------
+    ``image``: decoded pixels (grey or BGR[A], any depth), ``(H, W[, C])``. ``camera``: its
+    intrinsics (size, if given, must match; lens distortion is removed from the segments' end
+    points), or None when the focal length is unknown: it is then estimated from two finite
+    orthogonal vanishing points (spec section 7), with the principal point
+    ``principal_point`` or the image's centre. ``lines``: segments ``(N, 4)`` to use instead
+    of detecting them (tests). ``wall``: ``frontal`` (spec section 7) or ``dominant``
+    (:func:`world_from_camera_of`). Never raises for an image that cannot tell its pose: the
+    result's ``error`` says why (``only 1 of 3 directions found, 14 segments``).
+    """
+    if wall not in WALL_CHOICES:
+        raise ValueError(f"wall must be one of {', '.join(WALL_CHOICES)}, got {wall!r}")
+    height, width = np.asarray(image).shape[:2]
+    if camera is not None and camera.width is not None and (
+            (camera.width, camera.height) != (width, height)):
+        raise ValueError(f"the camera is {camera.width}x{camera.height} pixels but the image "
+                         f"is {width}x{height}")
+    detected = detect_segments(image) if lines is None else np.asarray(lines, dtype=np.float64)
+    segments = len(detected)
+    if segments < MIN_SEGMENTS:
+        return _failure(f"too few straight segments: {segments} (need {MIN_SEGMENTS})",
+                        detected, segments)
+    diagonal = math.hypot(width, height)
+    inlier_px = INLIER_PX * max(1.0, diagonal / 800.0)
+    ideal = detected
+    if camera is not None:
+        camera = Intrinsics(camera.fx, camera.fy, camera.cx, camera.cy, camera.skew,
+                            width, height, camera.lens)
+        lens = lens_distortion(View(intrinsics=camera, pose=Pose(0.0, 0.0)))
+        if lens is not None:
+            ideal = np.hstack([lens.undistort(detected[:, :2]), lens.undistort(detected[:, 2:])])
+            reached = np.all(np.isfinite(ideal), axis=1)  # none beyond the lens's fold
+            detected, ideal = detected[reached], ideal[reached]
+        return _estimate_known_focal(detected, ideal, camera, inlier_px, segments, False, wall)
+    if principal_point is None:
+        principal_point = ((width - 1) / 2.0, (height - 1) / 2.0)
+    centre = np.array(principal_point, dtype=np.float64)
+    focal = _focal_of(ideal, centre, diagonal, max(width, height), inlier_px)
+    if focal is None:
+        return _failure(
+            "cannot tell the focal length: no two finite vanishing points of orthogonal "
+            f"directions ({segments} segments); give the focal length", detected, segments,
+            estimated=True)
+    trial = Intrinsics(focal, focal, centre[0], centre[1], width=width, height=height)
+    return _estimate_known_focal(detected, ideal, trial, inlier_px, segments, True, wall)
+
+
+def _focal_of(ideal: np.ndarray, centre: np.ndarray, diagonal: float, side: float,
+              inlier_px: float) -> float | None:
+    """The focal length of an image whose camera is unknown (spec section 7).
+
+    The frame is searched at :data:`FOCAL_GRID` focal lengths (multiples of the long side);
+    at the best, the clusters' vanishing points must include two finite orthogonal ones
+    (``f^2 = -(p1 - c).(p2 - c)``, else None: the image cannot tell), and the better of that
+    and the grid's value is polished by :func:`polish_focal` until it settles.
+    """
+    def fitted(f: float) -> tuple[Frame, float, float]:
+        camera = Intrinsics(f, f, centre[0], centre[1])
+        normals, half = interpretation_planes(ideal, _camera_from_pixel(camera))
+        frame = fit_manhattan_frame(normals, half, inlier_px, hypotheses=GRID_HYPOTHESES)
+        pixel_from_camera = np.linalg.inv(_camera_from_pixel(camera))
+        return frame, f, image_score(ideal, pixel_from_camera, frame.directions, inlier_px)
+
+    frame, focal, score = max((fitted(side * factor) for factor in FOCAL_GRID),
+                              key=lambda candidate: candidate[2])
+    points = [cluster_vanishing_point(ideal[frame.labels == k], centre, diagonal)
+              if (frame.labels == k).sum() >= MIN_DIRECTION_SEGMENTS else None for k in range(3)]
+    from_points = focal_from_vanishing_points(points, centre, diagonal)
+    if from_points is None:
+        return None
+    if fitted(from_points)[2] > score:
+        focal = from_points
+    for _ in range(4):  # each polish re-fits the frame (its inliers) at the new focal length
+        polished = polish_focal(ideal, centre, focal, inlier_px)
+        done, focal = abs(math.log(polished / focal)) < 0.005, polished
+        if done:
+            break
+    return focal
+
+
+def _estimate_known_focal(detected: np.ndarray, ideal: np.ndarray, camera: Intrinsics,
+                          inlier_px: float, segments: int, estimated: bool,
+                          wall: str) -> PoseEstimate:
+    """The frame, wall and pose with a known camera (:func:`estimate_pose`'s main path)."""
+    normals, half = interpretation_planes(ideal, _camera_from_pixel(camera))
+    frame = fit_manhattan_frame(normals, half, inlier_px)
+    support = frame.support()
+    needed = max(MIN_DIRECTION_SEGMENTS, math.ceil(MIN_DIRECTION_FRACTION * segments))
+    found = int((support >= needed).sum())
+    if found < 2:
+        return _failure(f"only {found} of 3 directions found, {segments} segments", detected,
+                        segments, found, camera.focal, estimated, frame.labels)
+    try:
+        lengths = np.bincount(frame.labels[frame.labels >= 0],
+                              weights=half[frame.labels >= 0], minlength=3)
+        world_from_camera, order = world_from_camera_of(frame.directions, lengths, wall)
+        angles = pose_from_rotation(world_from_camera)
+        pose = Pose(angles.pan, angles.tilt, angles.roll)
+    except (PoseError, ValueError) as error:
+        return _failure(f"no pose: {error}", detected, segments, found, camera.focal, estimated,
+                        frame.labels)
+    pixel_from_camera = np.linalg.inv(_camera_from_pixel(camera))
+    points: list[tuple[float, float] | None] = []
+    relabel = -np.ones(len(frame.labels), dtype=int)
+    for name_index, k in enumerate(order):
+        relabel[frame.labels == k] = name_index
+        point = pixel_from_camera @ frame.directions[:, k]
+        if abs(point[2]) * 1e9 <= np.linalg.norm(point[:2]):
+            points.append(None)
+        else:
+            points.append((float(point[0] / point[2]), float(point[1] / point[2])))
+    return PoseEstimate(
+        pose, camera.focal, estimated, confidence_of(frame, half), segments,
+        int((frame.labels >= 0).sum()), found, tuple(points), world_from_camera, detected,
+        relabel,
+    )

@@ -1,0 +1,284 @@
+"""Pose estimates of image files: the camera of each, the estimate, its sidecar row, its
+picture; and the batch of them on the executor's worker processes (``gsrwt estimate``,
+``gsrwt rectify --auto``).
+
+A row is a sidecar row (``image, pan, tilt, roll, focal, cx, cy, width, height``, the
+columns ``gsrwt rectify --sidecar`` reads) followed by what the estimate says of itself.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import warnings
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import cv2
+import numpy as np
+
+from ..api.estimate import DIRECTION_NAMES, WALL_CHOICES, EstimateError, PoseEstimate, estimate_pose
+from ..geometry.camera import Intrinsics
+from ..imaging.images import (
+    DEFAULT_MAX_INPUT_PIXELS,
+    encode_image,
+    image_file_size,
+    keep_freed_memory,
+    read_image,
+)
+from ..inputs.focal import exif_focal, focal_source
+from ..inputs.records import GSRWT_FIELDS, POSE_FIELDS, SENSOR_FIELDS, view_from_values
+from ..io.outputs import write_atomic
+from .executor import ProcessExecutor
+from .job_errors import error_text
+
+#: Columns of ``gsrwt estimate`` (a public contract, documented in the README).
+ESTIMATE_COLUMNS = (
+    "image", "pan", "tilt", "roll", "focal", "fx", "fy", "cx", "cy", "width", "height",
+    "confidence", "segments", "inliers", "focal_source",
+    *(f"vp_{name}_{axis}" for name in DIRECTION_NAMES for axis in ("col", "row")),
+    "status", "error",
+)
+#: Fields of a record that give a pose: an estimate ignores them (it makes its own).
+_POSE_VALUES = ("pan", "tilt", "roll", *GSRWT_FIELDS, *POSE_FIELDS)
+
+
+@dataclass(frozen=True)
+class EstimateOptions:
+    """How poses are estimated: results below ``min_confidence`` are errors; ``wall`` is
+    ``frontal`` (spec section 7) or ``dominant`` (:func:`~gsrwt_cli.api.estimate.
+    world_from_camera_of`)."""
+
+    min_confidence: float = 0.0
+    wall: str = "frontal"
+    max_input_pixels: float = DEFAULT_MAX_INPUT_PIXELS
+
+    def __post_init__(self) -> None:
+        if self.wall not in WALL_CHOICES:
+            raise ValueError(f"wall must be one of {', '.join(WALL_CHOICES)}")
+
+
+def camera_for(path: Path, values: Mapping[str, Any], where: str
+               ) -> tuple[Intrinsics | None, str, tuple[float, float] | None]:
+    """The intrinsics an image's values give (their pose left out), where its focal length
+    comes from (``option``, ``sidecar``, ``camera``, ``exif``, or ``estimated`` when nothing
+    gives one: then the intrinsics are None), and the principal point given without a focal
+    length. Raises :class:`~gsrwt_cli.inputs.records.RecordError` for a bad value."""
+    own = {name: value for name, value in values.items() if name not in _POSE_VALUES}
+    source = focal_source(own, where)
+    if own.get("focal_mm") not in (None, "") and own.get("width") in (None, ""):
+        size = image_file_size(path)
+        if size is not None:
+            own["width"], own["height"] = size
+    if source is None:
+        found = exif_focal(path)
+        if found is not None:
+            own["fx"], own["fy"], source = found.fx, found.fy, "exif"
+    if source is None:
+        view = view_from_values({**own, "pan": 0, "tilt": 0, "focal": 1.0}, where)
+        given = own.get("cx") not in (None, "")
+        return None, "estimated", (view.cx, view.cy) if given else None
+    return view_from_values({**own, "pan": 0, "tilt": 0}, where).intrinsics, source, None
+
+
+def estimate_file(path: Path, values: Mapping[str, Any], where: str, options: EstimateOptions
+                  ) -> tuple[PoseEstimate, Intrinsics | None, str, np.ndarray]:
+    """Read ``path`` and estimate its pose: the estimate, the camera it was given (None when
+    the focal length was estimated), the focal length's source and the decoded image."""
+    camera, source, principal_point = camera_for(path, values, where)
+    image = read_image(path, options.max_input_pixels)
+    height, width = image.shape[:2]
+    if camera is not None and camera.width is not None and (
+            (camera.width, camera.height) != (width, height)):
+        raise ValueError(f"the parameters say {camera.width}x{camera.height} pixels but the "
+                         f"image is {width}x{height}")
+    estimate = estimate_pose(image, camera, principal_point=principal_point, wall=options.wall)
+    return estimate, camera, source, image
+
+
+def checked(estimate: PoseEstimate, options: EstimateOptions) -> None:
+    """Raise :class:`EstimateError` for an estimate with no pose or too little confidence."""
+    if not estimate.ok:
+        raise EstimateError(estimate.error)
+    if estimate.confidence < options.min_confidence:
+        raise EstimateError(f"confidence {estimate.confidence:.2f} is below the minimum "
+                             f"{options.min_confidence:g}")
+
+
+def estimated_values(estimate: PoseEstimate, camera: Intrinsics | None, width: int,
+                     height: int, principal_point: tuple[float, float] | None = None
+                     ) -> dict[str, Any]:
+    """The sidecar values of an estimate: pose, focal length (or fx, fy), principal point,
+    size."""
+    assert estimate.pose is not None and estimate.focal is not None
+    values: dict[str, Any] = {"pan": estimate.pose.pan, "tilt": estimate.pose.tilt,
+                              "roll": estimate.pose.roll, "width": width, "height": height}
+    used = camera_used(estimate, camera, width, height, principal_point)
+    assert used is not None
+    if used.fx == used.fy:
+        values["focal"] = used.fx
+    else:
+        values.update(fx=used.fx, fy=used.fy)
+    values.update(cx=used.cx, cy=used.cy)
+    return values
+
+
+def camera_used(estimate: PoseEstimate, camera: Intrinsics | None, width: int, height: int,
+                principal_point: tuple[float, float] | None = None) -> Intrinsics | None:
+    """The camera the estimate worked with (the given one, or the estimated focal length at
+    the principal point), with the image's size; None if there is none."""
+    if camera is not None:
+        return Intrinsics(camera.fx, camera.fy, camera.cx, camera.cy, camera.skew, width,
+                          height, camera.lens)
+    if estimate.focal is None:
+        return None
+    cx, cy = principal_point or ((width - 1) / 2.0, (height - 1) / 2.0)
+    return Intrinsics(estimate.focal, estimate.focal, cx, cy, width=width, height=height)
+
+
+def estimate_row(estimate: PoseEstimate, source: str) -> dict[str, Any]:
+    """The columns of an estimate other than its sidecar values."""
+    row: dict[str, Any] = {"confidence": round(estimate.confidence, 4),
+                           "segments": estimate.segments, "inliers": estimate.inliers,
+                           "focal_source": source}
+    for name, point in zip(DIRECTION_NAMES, estimate.vanishing_points):
+        if point is not None:
+            row[f"vp_{name}_col"], row[f"vp_{name}_row"] = point
+    return row
+
+
+def estimated_view_values(path: Path, values: Mapping[str, Any], where: str,
+                          options: EstimateOptions) -> tuple[dict[str, Any], str, float]:
+    """An image's values with its pose estimated (``rectify --auto``): the values (lens and
+    calibration file kept, the estimate's pose and intrinsics over them), where the focal
+    length came from, and the confidence. Raises :class:`~gsrwt_cli.api.estimate.EstimateError`
+    when the image cannot tell (or tells too little)."""
+    estimate, camera, source, image = estimate_file(path, values, where, options)
+    height, width = image.shape[:2]
+    del image
+    checked(estimate, options)
+    principal_point = camera_for(path, values, where)[2] if camera is None else None
+    merged = {name: value for name, value in values.items()
+              if name not in (*_POSE_VALUES, *SENSOR_FIELDS, "focal", "fx", "fy")}
+    merged.update(estimated_values(estimate, camera, width, height, principal_point))
+    return merged, source, round(estimate.confidence, 4)
+
+
+# --------------------------------------------------------------------------------------------
+# The batch of ``gsrwt estimate``
+# --------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class EstimateJob:
+    """One image: its file, its name in the table (the relative path a sidecar matches), its
+    raw camera values and where they came from, its picture's file (``--draw``), and an error
+    known before reading it."""
+
+    source: Path
+    name: str
+    values: dict[str, Any]
+    where: str
+    picture: Path | None = None
+    error: str | None = None
+
+
+def process_estimate(job: EstimateJob, options: EstimateOptions,
+                     describe: Callable[[BaseException], str | None] | None = None,
+                     picture_root: Path | None = None) -> dict[str, Any]:
+    """The row of one image; never raises for a bad image (its row says what went wrong)."""
+    row: dict[str, Any] = {"image": job.name}
+    try:
+        with np.errstate(all="ignore"), warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            if job.error is not None:
+                raise EstimateError(job.error)
+            estimate, camera, source, image = estimate_file(job.source, job.values, job.where,
+                                                            options)
+            row.update(estimate_row(estimate, source))
+            height, width = image.shape[:2]
+            principal_point = None
+            if camera is None:
+                principal_point = camera_for(job.source, job.values, job.where)[2]
+            if job.picture is not None:
+                from ..api.estimate_drawing import draw_estimate  # only when pictures are asked for
+
+                used = camera_used(estimate, camera, width, height, principal_point)
+                picture = draw_estimate(image, estimate, used)
+                write_atomic(job.picture, encode_image(picture, ".png"), root=picture_root)
+            del image
+            checked(estimate, options)
+            row.update(estimated_values(estimate, camera, width, height, principal_point))
+            row["status"] = "ok"
+    except Exception as error:  # every failure of one image is that image's row
+        row.update(status="error", error=error_text(error, describe))
+    return row
+
+
+class EstimateWorker:
+    """One worker's state for ``gsrwt estimate``: the options."""
+
+    def __init__(self, options: EstimateOptions, picture_root: Path | None,
+                 opencv_threads: int = 0) -> None:
+        self.options = options
+        self.picture_root = picture_root
+        if opencv_threads:
+            cv2.setNumThreads(opencv_threads)
+
+    @classmethod
+    def in_own_process(cls, options: EstimateOptions, picture_root: Path | None,
+                       opencv_threads: int = 0) -> EstimateWorker:
+        keep_freed_memory()
+        return cls(options, picture_root, opencv_threads)
+
+    def __call__(self, job: EstimateJob) -> dict[str, Any]:
+        return process_estimate(job, self.options, picture_root=self.picture_root)
+
+
+def run_estimates(jobs: list[EstimateJob], options: EstimateOptions, processes: int,
+                  on_row: Callable[[dict[str, Any]], None], *, picture_root: Path | None = None,
+                  context: multiprocessing.context.BaseContext,
+                  on_progress: Callable[[], None] | None = None) -> int:
+    """Estimate every job on :class:`~gsrwt_cli.batch.executor.ProcessExecutor` workers (a worker
+    that dies costs only its image), handing rows to ``on_row`` in job order; returns how
+    many failed. If the run is stopped (``KeyboardInterrupt``, say), the workers are
+    stopped, every job still gets its row (``interrupted`` for those not done) and the
+    exception goes on."""
+    failed = 0
+    rows: dict[int, dict[str, Any]] = {}
+    following = 0
+
+    def died(job: EstimateJob, reason: str) -> dict[str, Any]:
+        return {"image": job.name, "status": "error", "error": reason}
+
+    def emit() -> None:
+        nonlocal following, failed
+        while following in rows:
+            done = rows.pop(following)
+            following += 1  # first: a stop during on_row must not row this image again
+            failed += done.get("status") != "ok"
+            on_row(done)
+
+    executor: ProcessExecutor[EstimateJob, dict[str, Any]] = ProcessExecutor(
+        EstimateWorker.in_own_process, (options, picture_root, 1 if processes > 1 else 0),
+        max(1, min(processes, len(jobs))), on_death=died,
+        context=context,
+    )
+    results = executor.map_unordered(jobs)
+    try:
+        for index, row in results:
+            rows[index] = row
+            if on_progress is not None:
+                on_progress()
+            emit()
+    except BaseException:
+        results.close()  # stops the workers
+        for index in range(following, len(jobs)):
+            rows.setdefault(index, {"image": jobs[index].name, "status": "interrupted",
+                                    "error": "not done: the run was interrupted"})
+        emit()
+        raise
+    finally:
+        results.close()
+    return failed

@@ -1,0 +1,524 @@
+"""Batches: find the images, match their parameters, rectify them in worker processes.
+
+Each image becomes a :class:`Job` in the main process (cheap: paths and parameter values),
+and a table row in a worker (read, warp, write atomically). Only one image per worker is in
+memory at a time; rows come back in input order. Every image gets a row that tells the truth,
+whatever happens to it or to its worker.
+
+Over 400 lines: the truthful row of every kind of job (done, skipped, failed, interrupted,
+its worker dead) is the module's one job.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import multiprocessing
+import os
+import warnings
+from collections.abc import Callable, Iterable, Mapping
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Any
+
+import cv2
+import numpy as np
+
+from ..api.rectify import RectifyInfo, plan_image
+from ..base.messages import one_line
+from ..geometry.camera import View
+from ..imaging.images import (
+    Scratch,
+    check_writable,
+    image_file_size,
+    keep_freed_memory,
+    measure_image_file,
+)
+from ..inputs.focal import exif_focal, focal_source
+from ..inputs.parameters import Found, NotFound, Problem, resolve_parameters
+from ..inputs.records import RecordError, view_from_values
+from ..inputs.sidecar import Sidecar
+from ..inputs.sources import Source
+from ..io.outputs import OutsideOutputError, check_inside, remove_stale_temporaries, write_atomic
+from ..io.storage import Location, fetched, is_url, open_input
+from ..tables.rows import PARAMS_COLUMNS, params_row
+from .executor import Executor, ProcessExecutor
+from .job_errors import JobError, error_text
+from .reruns import differences, is_regular_file, made_with, record_of
+from .settings import Describe, Settings  # noqa: F401  (named here too)
+
+RECTIFY_COLUMNS = (
+    *PARAMS_COLUMNS,
+    "focal_source",
+    "pose_source",
+    "confidence",
+    "output",
+    "out_width",
+    "out_height",
+    "scale",
+    "homography",
+    "made_with",
+    "status",
+    "error",
+)
+
+
+# --------------------------------------------------------------------------------------------
+# Jobs: one per image, with its parameters found in the main process
+# --------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Job:
+    """Everything a worker needs for one image (picklable, small)."""
+
+    source: Path | Location  # a local path, or a URL (:mod:`~gsrwt_cli.io.storage`)
+    output: Path | Location
+    values: dict[str, Any] | None  # raw parameters from the first source that has them
+    where: str  # where the parameters came from, for messages
+    error: str | None = None  # known before reading the image
+    existed: bool = False  # the output existed when the run began
+    #: sidecar, yaml, options, or estimated (from the image: ``rectify --auto``)
+    pose_source: str | None = None
+    estimate: Any = None  # the EstimateOptions of an estimated pose
+    #: The previous table's row of an existing output, checked (:func:`~gsrwt_cli.batch.reruns.
+    #: record_of`): what made the file that is there.
+    record: dict[str, Any] | None = None
+
+
+def plan_jobs(
+    sources: Iterable[Source],
+    outdir: Path | Location,
+    sidecar: Sidecar | None,
+    fallback: dict[str, Any],
+    extension: str | None,
+    auto: Any = None,
+) -> list[Job]:
+    """One job per source; outputs mirror relative paths under ``outdir``.
+
+    ``auto``: the :class:`~gsrwt_cli.batch.estimate_jobs.EstimateOptions` of images whose pose no
+    source gives (``rectify --auto``): their pose is estimated from the image.
+
+    An output whose directory leads out of ``outdir`` (through a symbolic link) is an error
+    of its job, as is an output that another job also claims.
+    """
+    jobs = []
+    claimed: dict[Path | Location, Path | Location] = {}
+    # On an object store, which outputs exist is one listing, not a request per image.
+    present = outdir.list_objects() if isinstance(outdir, Location) else None
+    for source in sources:
+        relative = Path(*source.relative.parts)
+        if extension is not None:
+            relative = relative.with_suffix(extension)
+        output = outdir / relative
+        pose_source = None
+        match resolve_parameters(source.path, source.relative, sidecar, fallback,
+                                 estimate=auto is not None):
+            case Found(values=values, where=where, origin=origin):
+                error, pose_source = None, origin.value.replace("adjacent ", "")
+            case Problem(message=error, where=where):
+                values = None
+            case NotFound() as missing:
+                values, where, error = None, "", missing.message
+        if output in claimed:
+            error = f"its output {output} is also the output of {claimed[output]}"
+        claimed.setdefault(output, source.path)
+        if error is None:
+            try:
+                check_inside(outdir, output)
+            except OutsideOutputError as problem:
+                error = f"its output {output} {problem}"
+        if present is not None:
+            existed = error is None and str(output) in present
+        else:
+            existed = error is None and os.path.lexists(output)
+        jobs.append(Job(source.path, output, values, where, error, existed, pose_source,
+                        auto if pose_source == "estimated" else None))
+    return jobs
+
+
+# --------------------------------------------------------------------------------------------
+# One image: the work of a worker, and the rows the parent makes itself
+# --------------------------------------------------------------------------------------------
+
+
+def _view(job: Job, estimate: bool = True) -> tuple[View, str, dict[str, Any]]:
+    """The job's view, where its focal length came from (EXIF read here if needed) and its
+    ``pose_source`` and ``confidence`` columns; an estimated pose is estimated here (unless
+    not ``estimate``: then it is an error)."""
+    if job.error is not None:
+        raise JobError(job.error)
+    assert job.values is not None
+    if job.pose_source == "estimated":
+        if not estimate:
+            raise JobError("its pose was not estimated")
+        from .estimate_jobs import estimated_view_values  # the estimator, only when asked for
+
+        values, found, confidence = estimated_view_values(job.source, job.values, job.where,
+                                                          job.estimate)
+        try:
+            view = view_from_values(values, job.where)
+        except RecordError as error:
+            raise JobError(str(error)) from None
+        return view, found, {"pose_source": "estimated", "confidence": confidence}
+    values, source = dict(job.values), focal_source(job.values, job.where)
+    if values.get("focal_mm") not in (None, "") and values.get("width") in (None, ""):
+        size = image_file_size(job.source)  # millimetres become pixels with the image's size
+        if size is not None:
+            values["width"], values["height"] = size
+    if source is None:
+        found = exif_focal(job.source)
+        if found is None:
+            raise JobError(
+                "no focal length: none in the parameters, no camera file, and no usable "
+                "focal length in the image's EXIF"
+            )
+        values["fx"], values["fy"] = found.fx, found.fy
+        source = "exif"
+    try:
+        return view_from_values(values, job.where), source, {"pose_source": job.pose_source}
+    except RecordError as error:
+        raise JobError(str(error)) from None
+
+
+def _geometry(info: RectifyInfo) -> dict[str, Any]:
+    return {
+        **params_row(info.view, None),
+        **info.pixel_map.table_columns(),
+        "scale": info.frame.scale,
+    }
+
+
+def _made_with(job: Job, settings: Settings) -> str | None:
+    """The ``made_with`` cell of the job's output (:func:`~gsrwt_cli.batch.reruns.made_with`)."""
+    wall = job.estimate.wall if job.estimate is not None else None
+    return made_with(job.values, wall, settings, job.output.suffix)
+
+
+#: The error of an existing output that no record vouches for and these options do not make.
+NOT_MADE_SO = ("its output exists, not made with these options (no valid row of the previous "
+               "table records it); use --overwrite to redo it")
+NOT_A_FILE = "its output exists and is not a regular file; remove it or use another -o"
+
+
+def _plan(view: View, width: int, height: int, settings: Settings) -> RectifyInfo:
+    return plan_image(
+        view, width, height, bbox=settings.bbox, scale=settings.scale,
+        px_per_unit=settings.px_per_unit, max_stretch=settings.max_stretch,
+        max_pixels=settings.max_pixels, max_size=settings.max_size,
+    )
+
+
+def process_job(job: Job, settings: Settings, scratch: Scratch | None = None) -> dict[str, Any]:
+    """Rectify one image and return its table row; never raises for a bad image.
+
+    ``scratch``: the worker's reusable memory (a fresh one if not given). Whatever goes
+    wrong, from a bad parameter to an overflow deep in the geometry, becomes the row's
+    ``error``; a result that is not finite is an error, never ``ok``.
+
+    An output that existed when the run began (without ``overwrite``; one with a valid
+    record of it never comes here) is made again in memory and compared with the file:
+    ``skipped`` if it is the very file these options make, else an error; never rewritten.
+    """
+    scratch = scratch or Scratch()
+    row: dict[str, Any] = {"image": str(job.source), "output": str(job.output)}
+    checking = job.existed and not settings.overwrite and (  # gone since: made afresh
+        os.path.lexists(job.output) if isinstance(job.output, Path) else job.output.exists())
+    try:
+        with np.errstate(all="ignore"), warnings.catch_warnings(), fetched(job.source):
+            warnings.simplefilter("ignore")
+            view, source, pose = _view(job)
+            row.update(params_row(view, str(job.source)), focal_source=source, **pose)
+            if checking and not is_regular_file(job.output):
+                raise JobError(NOT_A_FILE)
+            if not checking and job.output.exists() and not settings.overwrite:
+                # Written since the run began: by this run's own earlier try of the job
+                # (a worker that died after writing it, its task run again), so done.
+                return record_row(job, settings, "ok")
+            if not job.source.is_file():
+                raise JobError("no such file" if not job.source.exists() else "not a file")
+            width, height = measure_image_file(job.source, settings.max_input_pixels)
+            info = _plan(view, width, height, settings)  # refuses big outputs undecoded
+            image = scratch.read(job.source, settings.max_input_pixels)
+            dtype, channels = image.dtype, 1 if image.ndim == 2 else image.shape[2]
+            del image  # the scratch holds it for the warp
+            check_writable(
+                job.output.suffix, dtype,
+                4 if settings.alpha and channels in (1, 3) else channels, info.size,
+            )
+            if checking or not settings.dry_run:
+                warped = scratch.warp(
+                    info.pixel_map, settings.interpolation, settings.fill, settings.alpha,
+                    settings.antialias,
+                )
+                encoded = scratch.encode(warped, job.output.suffix, settings.quality)
+                del warped
+                if checking:
+                    with open_input(job.output) as handle:
+                        if handle.read(len(encoded) + 1) != encoded:
+                            raise JobError(NOT_MADE_SO)
+                else:
+                    write_atomic(job.output, encoded, root=settings.root)
+        row.update(_geometry(info), image=str(job.source), made_with=_made_with(job, settings),
+                   status="skipped" if checking else "planned" if settings.dry_run else "ok")
+    except Exception as error:  # every failure of one image is that image's row
+        row.update(status="error", error=error_text(error, settings.describe))
+    return row
+
+
+def record_row(job: Job, settings: Settings, status: str = "ok") -> dict[str, Any]:
+    """The full row of an image whose output this run wrote (its worker died or the run
+    was stopped before the row came back), without decoding anything.
+
+    The geometry comes from the input's header size and these settings; if the existing
+    output's size disagrees with it, ``error`` says so.
+    """
+    row: dict[str, Any] = {"image": str(job.source), "output": str(job.output)}
+    try:
+        with np.errstate(all="ignore"):
+            view, source, pose = _view(job)
+            row.update(params_row(view, str(job.source)), focal_source=source, **pose)
+            size = measure_image_file(job.source, settings.max_input_pixels)
+            info = _plan(view, size[0], size[1], settings)
+        row.update(_geometry(info), image=str(job.source), status=status,
+                   made_with=_made_with(job, settings))
+        existing = image_file_size(job.output)
+        if existing is not None and existing != info.size:
+            row["error"] = (
+                f"the existing output is {existing[0]}x{existing[1]}, not the "
+                f"{info.size[0]}x{info.size[1]} of these options; use --overwrite to redo it"
+            )
+    except Exception as error:
+        row.update(status=status, error=f"output exists; its geometry is unknown: "
+                   f"{error_text(error, settings.describe)}")
+    return row
+
+
+def died_row(job: Job, reason: str) -> dict[str, Any]:
+    """The row of an image whose worker died while working on it."""
+    row: dict[str, Any] = {"image": str(job.source), "output": str(job.output)}
+    with contextlib.suppress(Exception), np.errstate(all="ignore"):
+        view, source, pose = _view(job, estimate=False)
+        row.update(params_row(view, str(job.source)), focal_source=source, **pose)
+    row.update(status="error", error=reason)
+    return row
+
+
+def _written_before_it_stopped(job: Job, settings: Settings) -> bool:
+    """Whether this run wrote the job's output (whole: writes are atomic) before its worker
+    died or the run was stopped, so that the image was done after all."""
+    return not job.existed and not settings.dry_run and job.output.exists()
+
+
+def dead_worker_row(job: Job, reason: str, settings: Settings) -> dict[str, Any]:
+    """The row of an image whose worker died: ``error``, unless it was done after all."""
+    if _written_before_it_stopped(job, settings):
+        return record_row(job, settings, status="ok")
+    return died_row(job, reason)
+
+
+def interrupted_row(job: Job, settings: Settings) -> dict[str, Any]:
+    """The row of an image the run did not finish: ``ok`` if it wrote its output whole
+    before it stopped, else ``interrupted`` (an output that existed is not described: the
+    next run checks it again)."""
+    if _written_before_it_stopped(job, settings):
+        return record_row(job, settings, status="ok")
+    row = died_row(job, "not done: the run was interrupted")
+    row["status"] = "interrupted"
+    return row
+
+
+class ImageWorker:
+    """One worker's state: the settings and the memory reused from image to image."""
+
+    def __init__(self, settings: Settings, opencv_threads: int = 0) -> None:
+        self.settings = settings
+        self.scratch = Scratch()
+        if opencv_threads:
+            cv2.setNumThreads(opencv_threads)
+
+    @classmethod
+    def in_own_process(cls, settings: Settings, opencv_threads: int = 0) -> ImageWorker:
+        """A worker for a process of its own, tuned as only such a process may be
+        (:func:`~gsrwt_cli.imaging.images.keep_freed_memory`)."""
+        keep_freed_memory()
+        return cls(settings, opencv_threads)
+
+    def __call__(self, job: Job) -> dict[str, Any]:
+        return process_job(job, self.settings, self.scratch)
+
+
+# --------------------------------------------------------------------------------------------
+# The batch: jobs to workers, rows back in input order
+# --------------------------------------------------------------------------------------------
+
+
+def worker_context(fork_from_caller: bool = False) -> multiprocessing.context.BaseContext:
+    """How workers start.
+
+    By default they fork from a fresh server that has imported this module once, never from
+    the caller, whose OpenCV thread pool a fork could leave locked (spawn where there is no
+    forkserver). ``fork_from_caller`` forks the caller itself, which saves the server's start
+    (0.2-0.4 s a run, measured): only for a process that has run no OpenCV code and started
+    no thread, such as the ``gsrwt`` command before its pool.
+    """
+    methods = multiprocessing.get_all_start_methods()
+    if fork_from_caller and "fork" in methods:
+        return multiprocessing.get_context("fork")
+    if "forkserver" in methods:
+        context = multiprocessing.get_context("forkserver")
+        context.set_forkserver_preload([__name__])
+        return context
+    return multiprocessing.get_context("spawn")
+
+
+@dataclass
+class Counts:
+    ok: int = 0
+    skipped: int = 0
+    failed: int = 0
+    interrupted: int = 0
+    planned: int = 0  # --dry-run: checked, not written
+
+    def add(self, row: dict[str, Any]) -> None:
+        if row["status"] == "ok":
+            self.ok += 1
+        elif row["status"] == "planned":
+            self.planned += 1
+        elif row["status"] == "skipped":
+            self.skipped += 1
+        elif row["status"] == "interrupted":
+            self.interrupted += 1
+        else:
+            self.failed += 1
+
+
+def _remove_temporaries_of(job: Job, pid: int) -> None:
+    remove_stale_temporaries(job.output.parent, {pid})
+
+
+def job_for_elsewhere(job: Job) -> Job:
+    """The job with absolute paths (its image, output and calibration file), for a worker
+    whose working directory is not ours (on a cluster's machines, sharing our file system)."""
+    values = job.values
+    camera = (values or {}).get("camera")
+    if values is not None and camera and not is_url(camera) and not os.path.isabs(str(camera)):
+        values = {**values, "camera": os.path.abspath(str(camera))}
+    return replace(job, source=_absolute(job.source), output=_absolute(job.output),
+                   values=values)
+
+
+def _absolute(path: Path | Location) -> Path | Location:
+    return path if isinstance(path, Location) else Path(os.path.abspath(path))
+
+
+def row_for_here(job: Job, row: dict[str, Any]) -> dict[str, Any]:
+    """A row made from :func:`job_for_elsewhere`'s job, naming the files as ``job`` does."""
+    return {**row, "image": str(job.source), "output": str(job.output)}
+
+
+def settings_for_elsewhere(settings: Settings) -> Settings:
+    """The settings with an absolute output root (:func:`job_for_elsewhere`)."""
+    root = None if settings.root is None else _absolute(settings.root)
+    return replace(settings, root=root)
+
+
+def remove_temporaries_left(jobs: Iterable[Job]) -> None:
+    """Remove what workers that died left half-written beside these jobs' outputs: the
+    temporaries of their file names whose process is gone (workers on other machines
+    write to object stores, or their temporaries are removed by the next run there)."""
+    by_directory: dict[Path, set[str]] = {}
+    for job in jobs:
+        if not isinstance(job.output, Location):  # object stores have no temporaries
+            by_directory.setdefault(job.output.parent, set()).add(job.output.name)
+    for directory, names in by_directory.items():
+        remove_stale_temporaries(directory, names=names)
+
+
+def run_batch(
+    jobs: list[Job],
+    settings: Settings,
+    processes: int,
+    on_row: Callable[[dict[str, Any]], None],
+    *,
+    on_progress: Callable[[], None] | None = None,
+    previous: Mapping[tuple[str, str], Mapping[str, Any]] | None = None,
+    context: multiprocessing.context.BaseContext | None = None,
+    executor: Executor[Job, dict[str, Any]] | None = None,
+) -> Counts:
+    """Run all jobs, handing each row to ``on_row`` in job order; returns the counts.
+
+    Images are rectified by ``executor`` (default: ``processes`` worker processes of a
+    :class:`~gsrwt_cli.batch.executor.ProcessExecutor`, where a worker that dies costs only its
+    image, started as ``context`` says). Jobs known to fail, and images whose output exists
+    (without ``overwrite``) with a valid record in ``previous`` (the last table's rows by
+    ``(image, output)``, :func:`~gsrwt_cli.batch.reruns.record_of`), are rowed here, without a
+    worker: the record, ``skipped`` if it was made with what this run asks for, else an
+    error naming the differences. Other existing outputs are checked by a worker
+    (:func:`process_job`). If the run is stopped (an exception such as
+    ``KeyboardInterrupt``), the workers are stopped, every job not done gets its row
+    (:func:`interrupted_row`), and the exception goes on.
+    """
+    counts = Counts()
+    rows: dict[int, dict[str, Any]] = {}
+    state = {"next": 0}
+
+    if not settings.overwrite:
+        jobs = [replace(job, record=record_of(
+                    (previous or {}).get((str(job.source), str(job.output))), job.output,
+                    RECTIFY_COLUMNS)) if job.existed else job for job in jobs]
+
+    def parent_row(job: Job) -> dict[str, Any]:
+        if job.record is None:
+            return process_job(job, settings)
+        change = differences(job.record["made_with"], _made_with(job, settings) or "")
+        if change is None:
+            return {**job.record, "status": "skipped", "error": None}
+        error = f"its output exists from a run with other options ({change}); use " \
+                "--overwrite to redo it"
+        return {**job.record, "status": "error", "error": one_line(error, 500)}
+
+    def emit_ready(fill: Callable[[Job], dict[str, Any]] | None = None) -> None:
+        while state["next"] < len(jobs):
+            index = state["next"]
+            if index not in rows:
+                if index not in parent_jobs and fill is None:
+                    return
+                rows[index] = (fill or parent_row)(jobs[index])
+                if on_progress is not None:
+                    on_progress()
+            row = rows.pop(index)
+            counts.add(row)
+            on_row(row)
+            state["next"] += 1
+
+    def is_parent_job(job: Job) -> bool:
+        return job.error is not None or job.record is not None
+
+    parent_jobs = {index for index, job in enumerate(jobs) if is_parent_job(job)}
+    worker_jobs = [index for index in range(len(jobs)) if index not in parent_jobs]
+    if executor is None:
+        executor = ProcessExecutor(
+            ImageWorker.in_own_process, (settings, 1 if processes > 1 else 0),
+            max(1, min(processes, len(worker_jobs))),
+            on_death=lambda job, reason: dead_worker_row(job, reason, settings),
+            on_abandon=_remove_temporaries_of,
+            context=context or worker_context(),
+        )
+    results = executor.map_unordered([jobs[index] for index in worker_jobs])
+    try:
+        emit_ready()
+        for position, row in results:
+            rows[worker_jobs[position]] = row
+            if on_progress is not None:
+                on_progress()
+            emit_ready()
+        emit_ready()
+    except BaseException:
+        results.close()  # stops the workers, removes what they left half-written
+        emit_ready(lambda job: parent_row(job) if is_parent_job(job) else interrupted_row(
+            job, settings))
+        raise
+    finally:
+        results.close()
+    return counts
+

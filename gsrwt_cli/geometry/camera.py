@@ -1,0 +1,482 @@
+"""The camera of one image: :class:`Intrinsics` (how rays become pixels) and :class:`Pose`
+(where it looks), composed in :class:`View` with the wall's distance.
+
+``View`` is the one object that carries what is known about how an image was taken; the
+intrinsics hold ``fx, fy, cx, cy, skew``, the size and a slot for a lens model, the pose pan,
+tilt and roll (0 for now), so real cameras grow here without changing callers. Pixel
+coordinates are ``(col, row)`` with row growing downward and pixel centres at integers.
+
+Over 400 lines: the intrinsics, the lens, the pose and the view they make check every value
+where it enters, and belong together.
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from ..base.messages import quote
+from .bounds import (  # noqa: F401  (the bounds of a view, named here too)
+    DISTANCE_RANGE,
+    MAX_FOCAL_PX,
+    MAX_PRINCIPAL_POINT_PX,
+    MAX_SIDE_PX,
+    MIN_HORIZON_OFFSET_PX,
+    VIEW_FIELDS,
+)
+from .gsrwt import (
+    GsrwtParameters,
+    Matrix,
+    camera_from_world,
+    gsrwt_parameters,
+    interception,
+    map_points,
+)
+
+
+class ViewError(ValueError):
+    """An invalid camera parameter; ``field`` names the offending parameter."""
+
+    def __init__(self, field_name: str, message: str) -> None:
+        super().__init__(message)
+        self.field = field_name
+
+
+def _as_number(name: str, value: object) -> float | int | None:
+    """``value`` as a finite Python number (numpy scalars and big integers too), else ViewError."""
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise ViewError(name, f"{name} must be a number, got {quote(value)}")
+    given = value
+    try:
+        if type(value) not in (int, float):  # numpy scalars, Fractions: plain Python numbers
+            value = int(value) if isinstance(value, numbers.Integral) else float(value)
+        finite = math.isfinite(value)
+    except OverflowError:  # an int or a Fraction too large for a float
+        finite = False
+    if not finite:
+        raise ViewError(name, f"{name} must be a finite number, got {quote(given)}")
+    return value
+
+
+def _check_range(name: str, value: float, low: float, high: float, unit: str) -> None:
+    """``low < value < high``; ``low`` 0 reads "positive"."""
+    if value <= low:
+        what = "positive" if low == 0 else f"above {low:g}{unit}"
+        raise ViewError(name, f"{name} must be {what}, got {value:.15g}")
+    if value >= high:
+        raise ViewError(name, f"{name} must be below {high:g}{unit}, got {value:.15g}")
+
+
+#: Lens models (spec section 6) and the coefficients each takes, in OpenCV's order.
+LENS_MODELS = {
+    "plumb_bob": ("k1", "k2", "p1", "p2", "k3"),
+    "rational_polynomial": ("k1", "k2", "p1", "p2", "k3", "k4", "k5", "k6",
+                            "s1", "s2", "s3", "s4", "tau_x", "tau_y"),
+    "equidistant": ("k1", "k2", "k3", "k4"),
+}
+#: Other names people use for them (ROS's ``radtan``, OpenCV's ``fisheye``).
+LENS_ALIASES = {"radtan": "plumb_bob", "fisheye": "equidistant"}
+#: Every coefficient any model takes (the sidecar columns of a lens).
+LENS_FIELDS = LENS_MODELS["rational_polynomial"]
+
+
+@dataclass(frozen=True)
+class Lens:
+    """A lens distortion model as OpenCV applies it (spec section 6).
+
+    ``model``: ``plumb_bob`` (k1, k2, p1, p2, k3), ``rational_polynomial`` (k1..k6, p1, p2,
+    thin prism s1..s4, tilt tau_x, tau_y) or ``equidistant`` (the fisheye model of
+    ``cv2.fisheye``, k1..k4); ``coefficients`` by name, absent ones 0.
+    """
+
+    model: str
+    coefficients: tuple[tuple[str, float], ...] = ()
+
+    def __post_init__(self) -> None:
+        model = LENS_ALIASES.get(self.model, self.model)
+        if model not in LENS_MODELS:
+            raise ViewError("distortion_model", f"unknown lens model {quote(self.model)}; use "
+                            f"one of {', '.join(LENS_MODELS)}")
+        object.__setattr__(self, "model", model)
+        allowed = LENS_MODELS[model]
+        checked = []
+        for name, value in dict(self.coefficients).items():
+            if name not in allowed:
+                raise ViewError(name, f"the {model} model has no coefficient {name}")
+            number = _as_number(name, value)
+            if abs(number) >= 1e6:
+                raise ViewError(name, f"{name} must be within 1e6 of 0, got {number:.15g}")
+            checked.append((name, number))
+        checked.sort(key=lambda coefficient: allowed.index(coefficient[0]))
+        object.__setattr__(self, "coefficients", tuple(checked))
+
+    @property
+    def is_fisheye(self) -> bool:
+        return self.model == "equidistant"
+
+    def value(self, name: str) -> float:
+        return dict(self.coefficients).get(name, 0.0)
+
+    @property
+    def is_identity(self) -> bool:
+        """No distortion at all (every coefficient 0): a pinhole."""
+        return all(value == 0 for _, value in self.coefficients)
+
+    def opencv_names(self) -> tuple[str, ...]:
+        """The coefficients of the vector OpenCV's functions take, in its order: 4 for the
+        fisheye model, 5 for plumb_bob, 8 or (with prism or tilt terms) 14 for rational."""
+        names = LENS_MODELS[self.model]
+        if self.model == "rational_polynomial" and not any(
+            self.value(name) for name in names[8:]
+        ):
+            names = names[:8]
+        return names
+
+    def opencv_coefficients(self) -> np.ndarray:
+        """The vector OpenCV's functions take (:meth:`opencv_names`)."""
+        return np.array([self.value(name) for name in self.opencv_names()], dtype=np.float64)
+
+
+@dataclass(frozen=True)
+class Intrinsics:
+    """How a camera maps rays to pixels: ``K = [[fx, skew, cx], [0, fy, cy], [0, 0, 1]]``.
+
+    OpenCV's pixel convention (spec section 6): ``(col, row)``, row down, pixel centres at
+    integers; camera ``x`` right, ``y`` down. ``cx, cy`` default to the image centre
+    ``((width-1)/2, (height-1)/2)`` when the size is known. ``lens``: a :class:`Lens`, or
+    ``None`` for a pinhole. Values are checked as
+    :class:`View` documents, raising :class:`ViewError` naming the field.
+    """
+
+    fx: float
+    fy: float
+    cx: float | None = None
+    cy: float | None = None
+    skew: float = 0.0
+    width: int | None = None
+    height: int | None = None
+    lens: Lens | None = None
+
+    def __post_init__(self) -> None:
+        for name in ("fx", "fy", "cx", "cy", "skew", "width", "height"):
+            object.__setattr__(self, name, _as_number(name, getattr(self, name)))
+        for name in ("fx", "fy"):
+            _check_range(name, getattr(self, name), 0, MAX_FOCAL_PX, " pixels")
+        for name in ("cx", "cy", "skew"):
+            value = getattr(self, name)
+            if value is not None and abs(value) >= MAX_PRINCIPAL_POINT_PX:
+                raise ViewError(
+                    name, f"{name} must be within {MAX_PRINCIPAL_POINT_PX:g} pixels of 0, "
+                    f"got {value:.15g}"
+                )
+        for name in ("width", "height"):
+            value = getattr(self, name)
+            if value is None:
+                continue
+            _check_range(name, value, 0, math.inf, "")
+            if value > MAX_SIDE_PX:
+                raise ViewError(
+                    name, f"{name} must be at most {MAX_SIDE_PX} pixels, got {value:.15g}"
+                )
+            if value != int(value):
+                raise ViewError(name, f"{name} must be a whole number of pixels, got {value:.15g}")
+            object.__setattr__(self, name, int(value))
+        if (self.cx is None) != (self.cy is None):
+            missing = "cy" if self.cy is None else "cx"
+            raise ViewError(missing, "cx and cy must be given together")
+        if self.cx is None and self.width is not None and self.height is not None:
+            object.__setattr__(self, "cx", (self.width - 1) / 2.0)
+            object.__setattr__(self, "cy", (self.height - 1) / 2.0)
+        if self.lens is not None and self.lens.is_identity:
+            object.__setattr__(self, "lens", None)  # a pinhole, on the fast path
+
+    @property
+    def focal(self) -> float:
+        """The focal length of the thesis's image frame, ``f = sqrt(fx fy)`` (spec section 6)."""
+        return self.fx if self.fx == self.fy else math.sqrt(self.fx * self.fy)
+
+    @property
+    def has_principal_point(self) -> bool:
+        return self.cx is not None
+
+    def _principal_point(self) -> tuple[float, float]:
+        if self.cx is None or self.cy is None:
+            raise ValueError("the principal point is unknown: give cx, cy or width, height")
+        return self.cx, self.cy
+
+    def matrix(self) -> Matrix:
+        """The camera matrix ``K`` (OpenCV's)."""
+        cx, cy = self._principal_point()
+        return np.array([[self.fx, self.skew, cx], [0.0, self.fy, cy], [0.0, 0.0, 1.0]])
+
+    def image_from_pixel(self) -> Matrix:
+        """Pixel ``(col, row, 1)`` to the thesis's image frame ``(x up, y right, 1)`` at focal
+        length :attr:`focal`: ``diag(f, f, 1) @ C @ K^-1`` (``C``:
+        :data:`~gsrwt_cli.geometry.rotations.
+        THESIS_FROM_OPENCV`).
+
+        Written out so that a square-pixel camera gives exactly ``x = cy - row`` and
+        ``y = col - cx``.
+        """
+        cx, cy = self._principal_point()
+        f, fx, fy, s = self.focal, self.fx, self.fy, self.skew
+        return np.array(
+            [
+                [0.0, -(f / fy), (f / fy) * cy],
+                [f / fx, -(f / fx) * (s / fy), (f / fx) * (s / fy * cy - cx)],
+                [0.0, 0.0, 1.0],
+            ]
+        )
+
+    def pixel_from_image(self) -> Matrix:
+        """Thesis image frame to pixel, the inverse of :meth:`image_from_pixel`."""
+        cx, cy = self._principal_point()
+        f, fx, fy, s = self.focal, self.fx, self.fy, self.skew
+        return np.array(
+            [
+                [-(s / f), fx / f, cx],
+                [-(fy / f), 0.0, cy],
+                [0.0, 0.0, 1.0],
+            ]
+        )
+
+    def rays_from_pixels(self, pixels: np.ndarray) -> np.ndarray:
+        """``(N, 2)`` pixels to ``(N, 3)`` ray directions in the thesis's camera frame
+        (``X`` up, ``Y`` right, ``Z`` forward), with ``Z = 1``."""
+        image = map_points(self.image_from_pixel(), pixels)
+        return np.column_stack([image / self.focal, np.ones(len(image))])
+
+    def pixels_from_rays(self, rays: np.ndarray) -> np.ndarray:
+        """``(N, 3)`` ray directions in the thesis's camera frame to ``(N, 2)`` pixels
+        (rays with ``Z <= 0`` come back as ``inf``/``nan``)."""
+        rays = np.asarray(rays, dtype=np.float64)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            image = self.focal * rays[:, :2] / rays[:, 2:3]
+        return map_points(self.pixel_from_image(), image)
+
+
+@dataclass(frozen=True)
+class Pose:
+    """Where a camera looks, relative to the wall: ``pan``, ``tilt``, ``roll`` in degrees.
+
+    ``pan > 0`` turns left, ``tilt > 0`` tilts up (spec section 1), both strictly between -90
+    and 90. ``roll`` turns the camera about its optical axis after them (spec section 6):
+    ``world_from_camera = Rx(pan) Ry(tilt) Rz(roll)``; ``roll > 0`` leans the camera's top to
+    the right (seen from behind it), so the scene appears turned counter-clockwise.
+    """
+
+    pan: float
+    tilt: float
+    roll: float = 0.0
+
+    def __post_init__(self) -> None:
+        for name in ("pan", "tilt", "roll"):
+            object.__setattr__(self, name, _as_number(name, getattr(self, name)))
+        for name in ("pan", "tilt"):
+            value = getattr(self, name)
+            if abs(value) >= 90.0:
+                raise ViewError(
+                    name,
+                    f"{name} must be strictly between -90 and 90 degrees (the camera cannot see "
+                    f"the wall otherwise), got {value:g}",
+                )
+        if abs(self.roll) > 180.0:
+            raise ViewError("roll", f"roll must be within -180 and 180 degrees, got "
+                            f"{self.roll:g}")
+
+    def camera_from_world(self) -> Matrix:
+        """The rotation whose rows are the camera's axes in the wall's frame (Eq. 3.8, then
+        the roll about the optical axis): ``(Rx(pan) Ry(tilt) Rz(roll))^T``."""
+        return self.unrolled_from_rolled().T @ camera_from_world(self.pan, self.tilt)
+
+    def unrolled_from_rolled(self) -> Matrix:
+        """``Rz(roll)``: directions of the rolled camera in the camera at the same pan and
+        tilt without roll (thesis frame, X up, Y right). In the image frame (x up, y right)
+        the same matrix turns the rolled camera's image points into the unrolled one's."""
+        if self.roll == 0:
+            return np.eye(3)
+        angle = math.radians(self.roll)
+        c, s = math.cos(angle), math.sin(angle)
+        return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+    @property
+    def theta_deg(self) -> float:
+        """The angle between image plane and wall (Eq. 4.15): no focal length needed."""
+        return interception(self.pan, self.tilt)[0]
+
+    @property
+    def foreshortening(self) -> float:
+        """``cos theta = cos alpha cos beta`` (Eq. 4.15)."""
+        return interception(self.pan, self.tilt)[1]
+
+
+@dataclass(frozen=True, init=False)
+class View:
+    """The camera of one image: :class:`Intrinsics`, :class:`Pose` and the wall's distance.
+
+    ``View(pan, tilt, focal, cx=None, cy=None, width=None, height=None, distance=None)``, or
+    ``View(intrinsics=..., pose=..., distance=...)``.
+
+    Convention
+    ----------
+    - ``pan``, ``tilt``: degrees, ``pan > 0`` turns left, ``tilt > 0`` tilts up (spec section 1);
+      strictly between -90 and 90, and the horizon at least :data:`MIN_HORIZON_OFFSET_PX`
+      from the principal point.
+    - ``focal``: focal length in pixels, ``0 < focal <`` :data:`MAX_FOCAL_PX`.
+    - ``cx``, ``cy``: principal point in pixels; default ``((width-1)/2, (height-1)/2)``;
+      ``|cx|, |cy| <`` :data:`MAX_PRINCIPAL_POINT_PX`.
+    - ``width``, ``height``: image size in pixels, when known; whole, 1 to :data:`MAX_SIDE_PX`.
+    - ``distance``: ``Zc``, camera to wall along the wall's normal, in the user's unit, within
+      :data:`DISTANCE_RANGE`.
+
+    Any real number is accepted (numpy scalars included) and stored as a Python number;
+    anything else, or a value out of range, raises :class:`ViewError` naming the field.
+    """
+
+    intrinsics: Intrinsics
+    pose: Pose
+    distance: float | None
+    parameters: GsrwtParameters = field(repr=False, compare=False)
+
+    def __init__(
+        self,
+        pan: float | None = None,
+        tilt: float | None = None,
+        focal: float | None = None,
+        cx: float | None = None,
+        cy: float | None = None,
+        width: int | None = None,
+        height: int | None = None,
+        distance: float | None = None,
+        *,
+        roll: float = 0.0,
+        fx: float | None = None,
+        fy: float | None = None,
+        skew: float = 0.0,
+        lens: Lens | None = None,
+        intrinsics: Intrinsics | None = None,
+        pose: Pose | None = None,
+        parameters: GsrwtParameters | None = None,  # accepted from dataclasses.replace
+    ) -> None:
+        if pose is None:
+            for name, value in (("pan", pan), ("tilt", tilt)):
+                if value is None:
+                    raise ViewError(name, f"{name} is required")
+            pose = Pose(pan, tilt, roll)  # type: ignore[arg-type]
+        if intrinsics is None:
+            focal = _as_number("focal", focal)
+            if focal is not None:
+                _check_range("focal", focal, 0, MAX_FOCAL_PX, " pixels")
+            if (fx is None) != (fy is None):
+                missing = "fy" if fy is None else "fx"
+                raise ViewError(missing, "fx and fy must be given together")
+            if fx is None:
+                if focal is None:
+                    raise ViewError("focal", "focal is required")
+                fx = fy = focal
+            intrinsics = Intrinsics(fx, fy, cx, cy, skew, width, height, lens)
+        distance = _as_number("distance", distance)
+        if distance is not None:
+            _check_range("distance", distance, *DISTANCE_RANGE, "")
+        object.__setattr__(self, "intrinsics", intrinsics)
+        object.__setattr__(self, "pose", pose)
+        object.__setattr__(self, "distance", distance)
+        parameters = gsrwt_parameters(pose.pan, pose.tilt, intrinsics.focal)
+        if not parameters.is_frontal and parameters.shift < MIN_HORIZON_OFFSET_PX:
+            name = "pan" if abs(pose.pan) >= abs(pose.tilt) else "tilt"
+            raise ViewError(
+                name,
+                f"pan {pose.pan!r} and tilt {pose.tilt!r} with focal {intrinsics.focal:g} put "
+                f"the horizon {parameters.shift:.2g} pixels from the principal point, less "
+                f"than {MIN_HORIZON_OFFSET_PX:g} (the optical axis meets the wall beyond what "
+                "the camera resolves)",
+            )
+        object.__setattr__(self, "parameters", parameters)
+
+    pan = property(lambda self: self.pose.pan, doc="Pan in degrees (:class:`Pose`).")
+    tilt = property(lambda self: self.pose.tilt, doc="Tilt in degrees (:class:`Pose`).")
+    roll = property(lambda self: self.pose.roll, doc="Roll in degrees (:class:`Pose`).")
+    focal = property(lambda self: self.intrinsics.focal, doc="Focal length in pixels.")
+    cx = property(lambda self: self.intrinsics.cx, doc="Principal point column.")
+    cy = property(lambda self: self.intrinsics.cy, doc="Principal point row.")
+    width = property(lambda self: self.intrinsics.width, doc="Image width, if known.")
+    height = property(lambda self: self.intrinsics.height, doc="Image height, if known.")
+
+    def sidecar_values(self) -> dict[str, float | int | None]:
+        """The view as a sidecar row gives it: every field of :data:`VIEW_FIELDS`, those at
+        their defaults (no roll, square pixels, no skew) as None, so that they are left out."""
+        intrinsics = self.intrinsics
+        square = intrinsics.fx == intrinsics.fy
+        return {
+            "pan": self.pan, "tilt": self.tilt, "roll": self.roll or None,
+            "focal": intrinsics.fx if square else None,
+            "fx": None if square else intrinsics.fx, "fy": None if square else intrinsics.fy,
+            "cx": self.cx, "cy": self.cy, "skew": intrinsics.skew or None,
+            "width": self.width, "height": self.height, "distance": self.distance,
+        }
+
+    def with_size(self, width: int, height: int) -> View:
+        """The same view with a known image size (the principal point defaults to its centre)."""
+        return replace(self, intrinsics=replace(self.intrinsics, width=width, height=height))
+
+    @property
+    def has_principal_point(self) -> bool:
+        """Whether pixel coordinates can be related to the image frame."""
+        return self.intrinsics.has_principal_point
+
+    def _principal_point(self) -> tuple[float, float]:
+        return self.intrinsics._principal_point()
+
+    def image_from_pixel(self) -> Matrix:
+        """Pixel ``(col, row, 1)`` to the image frame of the camera at this pan and tilt
+        *without* roll (:meth:`Intrinsics.image_from_pixel`, then the roll undone: spec
+        section 6, the GS-RWT of a rolled view is the thesis's applied after turning the
+        image frame by the roll). Ideal (undistorted) pixels when the camera has a lens."""
+        if self.pose.roll == 0:
+            return self.intrinsics.image_from_pixel()
+        return self.pose.unrolled_from_rolled() @ self.intrinsics.image_from_pixel()
+
+    def pixel_from_image(self) -> Matrix:
+        """The inverse of :meth:`image_from_pixel`."""
+        if self.pose.roll == 0:
+            return self.intrinsics.pixel_from_image()
+        return self.intrinsics.pixel_from_image() @ self.pose.unrolled_from_rolled().T
+
+    def vanishing_point_pixels(self) -> np.ndarray:
+        """The main vanishing point as ``(col, row)``; ``inf`` for the frontal view."""
+        x, y = self.parameters.vanishing_point
+        cx, cy = self._principal_point()
+        intrinsics = self.intrinsics
+        if intrinsics.fx == intrinsics.fy and intrinsics.skew == 0 and self.pose.roll == 0:
+            return np.array([y + cx, cy - x])  # exact where infinite
+        return map_points(self.pixel_from_image(), [[x, y]])[0]
+
+    def vanishing_line_pixels(self) -> np.ndarray | None:
+        """``(a, b, c)`` with ``a col + b row + c = 0`` and ``a^2 + b^2 = 1`` (Eq. 4.28-4.30).
+
+        ``a col + b row + c > 0`` on the side where the wall is visible (the principal point's
+        side). ``None`` for the frontal view, whose vanishing line is at infinity.
+        """
+        if self.parameters.is_frontal:
+            return None
+        line = self.image_from_pixel().T @ self.parameters.vanishing_line
+        return line / math.hypot(line[0], line[1])
+
+    def horizon_in_image(self) -> bool | None:
+        """Whether the vanishing line crosses or touches the image; ``None`` if the size is unknown.
+
+        The image is the rectangle of pixel edges, ``[-0.5, width - 0.5] x [-0.5, height - 0.5]``.
+        """
+        if self.width is None or self.height is None:
+            return None
+        line = self.vanishing_line_pixels()
+        if line is None:
+            return False
+        cols = np.array([-0.5, self.width - 0.5, self.width - 0.5, -0.5])
+        rows = np.array([-0.5, -0.5, self.height - 0.5, self.height - 0.5])
+        return bool(np.any(line[0] * cols + line[1] * rows + line[2] <= 0))

@@ -1,0 +1,672 @@
+"""The map from output pixels back to input pixels: what a warp needs, in one object.
+
+A :class:`PixelMap` is what framing produces and rectify, render, the landmark commands and the
+table consume. It maps points both ways, knows which output pixels have no source, resamples
+an image in one OpenCV pass and says what the table's geometry columns are. It is a
+homography (the GS-RWT composed with the pixel frames) from ideal input pixels, and for a
+camera with a lens the lens model after it: then the warp is one ``cv2.remap`` through dense
+maps built once (and cached) per camera, pose and frame, never an undistortion followed by a
+second warp.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from collections import OrderedDict
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from .gsrwt import Matrix, largest_singular_value, local_stretch, map_points
+
+_POINT_CRITERIA = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 50, 1e-12)
+#: A pixel's ideal position is taken when the lens puts it back within this many pixels.
+_INVERSE_TOLERANCE_PX = 0.01
+#: OpenCV's inverse of a radial model is bisected again where it is further off than this.
+_RADIAL_TOLERANCE_PX = 1e-6
+#: Where output pixels have no source: far outside any image, sampled as the fill.
+NO_SOURCE = -1e6
+
+
+def monotonic_radius(coefficients: tuple[float, ...], fisheye: bool = False) -> float:
+    """How far from the optical axis a lens model is one-to-one: the normalized radius
+    ``r = tan(angle off axis)`` of ideal rays below which the distorted radius ``r_d(r)``
+    grows with ``r``; ``inf`` if it always does.
+
+    Beyond that radius the model folds back (``r_d`` shrinks again, or passes a pole): its
+    pixels repeat, mirrored, what rays nearer the axis show, and have no ray of their own.
+    ``coefficients``: OpenCV's vector. Plumb-bob and rational models:
+    ``r_d = r N(r^2) / D(r^2)`` with ``N = 1 + k1 s + k2 s^2 + k3 s^3`` and ``D = 1 + k4 s +
+    k5 s^2 + k6 s^3``; ``d r_d / dr`` has the sign of ``(N + 2 s N') D - 2 s N D'``, and the
+    radius is the square root of the smallest positive root of that polynomial or of ``D``
+    (tangential, prism and tilt terms, which are not radial, are left out). Fisheye model:
+    ``r_d = theta (1 + k1 theta^2 + ... + k4 theta^8)`` with ``theta = atan r``; the radius is
+    ``tan`` of the smallest root of ``d r_d / d theta`` below 90 degrees.
+    """
+    from numpy.polynomial import Polynomial
+
+    def smallest_positive_root(*polynomials: Polynomial) -> float:
+        roots = np.concatenate([polynomial.trim().roots() for polynomial in polynomials])
+        real = roots.real[(np.abs(roots.imag) <= 1e-9 * np.maximum(1.0, np.abs(roots.real)))
+                          & (roots.real > 0)]
+        return float(real.min()) if len(real) else math.inf
+
+    d = tuple(coefficients) + (0.0,) * 8
+    if fisheye:
+        k1, k2, k3, k4 = d[:4]
+        slope = Polynomial([1.0, 3 * k1, 5 * k2, 7 * k3, 9 * k4])  # d r_d / d theta, t = theta^2
+        theta = math.sqrt(smallest_positive_root(slope))
+        return math.tan(theta) if theta < math.pi / 2 else math.inf
+    k1, k2, _, _, k3, k4, k5, k6 = d[:8]
+    numerator, denominator = Polynomial([1.0, k1, k2, k3]), Polynomial([1.0, k4, k5, k6])
+    s = Polynomial([0.0, 1.0])
+    slope = ((numerator + 2 * s * numerator.deriv()) * denominator
+             - 2 * s * numerator * denominator.deriv())
+    return math.sqrt(smallest_positive_root(slope, denominator))
+
+
+def _radial_distortion(coefficients: tuple[float, ...], fisheye: bool,
+                       theta: np.ndarray) -> np.ndarray:
+    """``r_d`` of rays ``theta`` radians off the axis (the radial part of the model)."""
+    d = tuple(coefficients) + (0.0,) * 8
+    t = theta * theta
+    if fisheye:
+        k1, k2, k3, k4 = d[:4]
+        return theta * (1 + t * (k1 + t * (k2 + t * (k3 + t * k4))))
+    k1, k2, _, _, k3, k4, k5, k6 = d[:8]
+    s = np.tan(theta) ** 2
+    return np.tan(theta) * (1 + s * (k1 + s * (k2 + s * k3))) / (1 + s * (k4 + s * (k5 + s * k6)))
+
+
+@dataclass(frozen=True)
+class LensDistortion:
+    """The input camera's lens as OpenCV models it: ``camera_matrix`` (K, skew included),
+    ``coefficients`` (OpenCV's vector) and whether it is the ``fisheye`` (equidistant) model.
+
+    Ideal pixels are those of the same K without distortion (a pinhole); the maps go from
+    ideal to distorted (the lens, :meth:`distort`) and back (:meth:`undistort`, iterated).
+    """
+
+    camera_matrix: tuple[tuple[float, float, float], ...]
+    coefficients: tuple[float, ...]
+    fisheye: bool = False
+
+    @functools.cached_property
+    def limit(self) -> float:
+        """The normalized radius of ideal rays up to which the model is one-to-one
+        (:func:`monotonic_radius`): like the horizon, nothing beyond it is sampled or framed."""
+        return monotonic_radius(self.coefficients, self.fisheye)
+
+    @property
+    def limit_px(self) -> float:
+        """:attr:`limit` in ideal pixels from the principal point (along the larger focal)."""
+        return self.limit * max(self._k[0, 0], self._k[1, 1])
+
+    @property
+    def is_radial(self) -> bool:
+        """Whether the model only moves points along their radius (no tangential, prism or
+        tilt terms): its inverse is then one monotonic function of the radius."""
+        return self.fisheye or not any(v for i, v in enumerate(self.coefficients)
+                                       if i in (2, 3) or i >= 8)
+
+    def within(self, ideal: np.ndarray) -> np.ndarray:
+        """Which ``(N, 2)`` ideal pixels lie within :attr:`limit` (False for NaN)."""
+        if math.isinf(self.limit):
+            return np.all(np.isfinite(ideal), axis=1)
+        normalized = self._normalized(np.asarray(ideal, dtype=np.float64))
+        with np.errstate(invalid="ignore"):
+            return np.hypot(normalized[:, 0], normalized[:, 1]) < self.limit
+
+    @property
+    def _k(self) -> np.ndarray:
+        return np.array(self.camera_matrix, dtype=np.float64)
+
+    @property
+    def _d(self) -> np.ndarray:
+        return np.array(self.coefficients, dtype=np.float64)
+
+    def _normalized(self, pixels: np.ndarray) -> np.ndarray:
+        return map_points(np.linalg.inv(self._k), pixels)
+
+    def _pixels(self, normalized: np.ndarray) -> np.ndarray:
+        return map_points(self._k, normalized)
+
+    def distort(self, ideal: np.ndarray) -> np.ndarray:
+        """``(N, 2)`` ideal pixels to the pixels the lens puts them on; NaN beyond
+        :attr:`limit`, where the model folds back and no pixel is the ray's own."""
+        ideal = np.asarray(ideal, dtype=np.float64)
+        rays = np.column_stack([self._normalized(ideal), np.ones(len(ideal))])[:, None, :]
+        zero = np.zeros(3)
+        if self.fisheye:
+            distorted, _ = cv2.fisheye.projectPoints(rays, zero, zero, np.eye(3), self._d)
+        else:
+            distorted, _ = cv2.projectPoints(rays, zero, zero, np.eye(3), self._d)
+        pixels = self._pixels(distorted.reshape(-1, 2))
+        pixels[~self.within(ideal)] = np.nan
+        return pixels
+
+    def undistort(self, pixels: np.ndarray) -> np.ndarray:
+        """``(N, 2)`` pixels of the image to ideal pixels within :attr:`limit`; NaN for pixels
+        no such ray reaches (beyond where the model folds back).
+
+        OpenCV's iterative inverse first; an answer is kept when the lens puts it back on the
+        pixel (:data:`_INVERSE_TOLERANCE_PX`). A radial model's answers further off than
+        :data:`_RADIAL_TOLERANCE_PX` (OpenCV's fisheye inverse stops at 90 degrees of
+        distorted angle; its iterations crawl near a fold and can run away on strong
+        lenses) are found again by bisection of the model's monotonic part.
+        """
+        pixels = np.asarray(pixels, dtype=np.float64)
+        normalized = self._normalized(pixels)[:, None, :]
+        if self.fisheye:
+            ideal = cv2.fisheye.undistortPoints(normalized, np.eye(3), self._d,
+                                                criteria=_POINT_CRITERIA)
+        else:
+            ideal = cv2.undistortPoints(normalized, np.eye(3), self._d, None, None, None,
+                                            _POINT_CRITERIA)
+        ideal = self._pixels(ideal.reshape(-1, 2))
+        if self.is_radial:  # answers OpenCV did not polish (slow near a fold): bisected
+            unsure = ~(self._residual(ideal, pixels) <= _RADIAL_TOLERANCE_PX)
+            if unsure.any():
+                ideal[unsure] = self._radial_inverse(pixels[unsure])
+        ideal[~(self._residual(ideal, pixels) <= _INVERSE_TOLERANCE_PX)] = np.nan
+        return ideal
+
+    def _residual(self, ideal: np.ndarray, pixels: np.ndarray) -> np.ndarray:
+        """How far (pixels) the lens puts ``ideal`` from ``pixels``; NaN beyond the limit."""
+        with np.errstate(invalid="ignore"):
+            return np.hypot(*(self.distort(ideal) - pixels).T)
+
+    def _radial_inverse(self, pixels: np.ndarray, iterations: int = 64) -> np.ndarray:
+        """Ideal pixels of a radial model's ``pixels`` by bisection of the angle off axis
+        over the monotonic part (NaN where the distorted radius is beyond its reach)."""
+        distorted = self._normalized(pixels)
+        radius = np.hypot(distorted[:, 0], distorted[:, 1])
+        high = np.full(len(pixels), math.atan(self.limit) if math.isfinite(self.limit)
+                       else math.pi / 2)
+        low = np.zeros(len(pixels))
+        with np.errstate(all="ignore"):  # tan near 90 degrees overflows: "not below"
+            for _ in range(iterations):
+                middle = (low + high) / 2
+                below = _radial_distortion(self.coefficients, self.fisheye, middle) < radius
+                low, high = np.where(below, middle, low), np.where(below, high, middle)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            factor = np.where(radius > 0, np.tan(low) / radius, 1.0)
+        return self._pixels(distorted * factor[:, None])
+
+    def maps(self, output_from_ideal: np.ndarray, size: tuple[int, int],
+             step: int | None = None, reuse: tuple[np.ndarray, np.ndarray] | None = None):
+        """Maps (x, y; 32-bit float, which ``cv2.remap`` samples faster than fixed-point maps,
+        measured) of every output pixel to its (distorted) input pixel: output -> ideal input
+        pixel (the homography's inverse) -> lens; big frames' expanded from :meth:`grid`
+        (:meth:`expand`).
+
+        ``reuse``: maps an earlier call returned for a frame of the same size, whose memory
+        the new maps take over (writing fresh memory costs more than computing them).
+        """
+        step = map_step(size) if step is None else step
+        grid = self.grid(output_from_ideal, size, step)
+        return grid if step == 1 else self.expand(grid, size, step, reuse)
+
+    def grid(self, output_from_ideal: np.ndarray, size: tuple[int, int], step: int
+             ) -> tuple[np.ndarray, np.ndarray]:
+        """The maps at every ``step``-th output pixel (every pixel for ``step = 1``), with one
+        point more than the output on every side, so that :meth:`expand` extrapolates none.
+
+        ``cv2.initUndistortRectifyMap`` computes ``K distort((newK R)^-1 o)``; with ``newK = I``
+        and ``R = output_from_ideal @ K`` that is the lens applied to ``K^-1 H^-1 o``. OpenCV
+        there ignores skew, so a skewed camera's maps are computed point by point instead.
+        """
+        k = self._k
+        width, height = size
+        # Grid point (i, j) is output pixel (step (i - 1) + step/2 - 1/2, ...): the positions
+        # from which cv2.resize(fx = step) interpolates every output pixel.
+        offset = step / 2 - 0.5 - (step if step > 1 else 0)
+        output_from_grid = np.array([[step, 0.0, offset], [0.0, step, offset], [0.0, 0.0, 1.0]])
+        grid = size if step == 1 else (-(-width // step) + 3, -(-height // step) + 3)
+        if k[0, 1] == 0:
+            rotation = (np.linalg.inv(output_from_grid)
+                        @ np.asarray(output_from_ideal, dtype=np.float64) @ k)
+            initialize = (cv2.fisheye.initUndistortRectifyMap if self.fisheye
+                          else cv2.initUndistortRectifyMap)
+            maps = initialize(k, self._d, rotation, np.eye(3), grid, cv2.CV_32FC1)
+            if math.isfinite(self.limit):  # beyond the fold: no source, like the horizon
+                beyond = self._beyond_limit(np.linalg.inv(rotation), grid)
+                for part in maps:
+                    part[beyond] = NO_SOURCE
+            return maps
+        cols, rows = np.meshgrid(np.arange(grid[0], dtype=np.float64),
+                                 np.arange(grid[1], dtype=np.float64))
+        outputs = map_points(output_from_grid, np.column_stack([cols.ravel(), rows.ravel()]))
+        sources = self.distort(map_points(np.linalg.inv(output_from_ideal), outputs))
+        sources = np.nan_to_num(sources, nan=NO_SOURCE, posinf=NO_SOURCE, neginf=NO_SOURCE)
+        return (sources[:, 0].reshape(grid[1], grid[0]).astype(np.float32),
+                sources[:, 1].reshape(grid[1], grid[0]).astype(np.float32))
+
+    def _beyond_limit(self, normalized_from_grid: np.ndarray, grid: tuple[int, int]
+                      ) -> np.ndarray:
+        """Which grid points' normalized rays lie beyond :attr:`limit` (shape ``(rows,
+        cols)``); ``normalized_from_grid`` maps grid points to homogeneous normalized rays."""
+        cols = np.arange(grid[0], dtype=np.float64)[None, :]
+        rows = np.arange(grid[1], dtype=np.float64)[:, None]
+        x, y, w = (m[0] * cols + m[1] * rows + m[2] for m in normalized_from_grid)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return ~(np.hypot(x, y) < self.limit * np.abs(w))
+
+    @staticmethod
+    def expand(grid: tuple[np.ndarray, np.ndarray], size: tuple[int, int], step: int,
+               reuse: tuple[np.ndarray, np.ndarray] | None = None
+               ) -> tuple[np.ndarray, np.ndarray]:
+        """Every output pixel's map, interpolated bilinearly from :meth:`grid`'s (views into
+        the resized grid: ``cv2.remap`` takes row-strided maps as they are), into the memory
+        of ``reuse`` when that is an earlier expansion of the same size."""
+        width, height = size
+        padded = (grid[0].shape[0] * step, grid[0].shape[1] * step)
+        targets = [None, None]
+        if reuse is not None and all(part.base is not None and part.base.shape == padded
+                                     for part in reuse):
+            targets = [part.base for part in reuse]
+        return tuple(cv2.resize(part, None, dst=target, fx=step, fy=step,
+                                interpolation=cv2.INTER_LINEAR)
+                     [step:step + height, step:step + width]
+                     for part, target in zip(grid, targets))
+
+
+#: Lens maps of big frames are computed on a grid of every ``MAP_STEP``-th output pixel and
+#: interpolated bilinearly: the map is smooth, and interpolating it errs by under 0.01 px
+#: (tested) at a sixteenth of the cost.
+MAP_STEP = 4
+
+def map_step(size: tuple[int, int]) -> int:
+    """Every how many output pixels a frame's lens maps are computed: big frames on a grid
+    of :data:`MAP_STEP` (then interpolated), small ones at every pixel."""
+    return MAP_STEP if min(size) >= 64 * MAP_STEP else 1
+
+
+#: Bytes of remap maps a process keeps for poses it may see again (a 12-megapixel frame's
+#: maps take 96 MB, a 640x480 one's 2.5 MB): a robot's small frames keep some 80 poses.
+#: Maps over a quarter of this (frames over about 6 megapixels) are not kept beside others:
+#: only the last frame's, whose memory the next big frame's maps reuse (fresh memory costs
+#: page faults: 39 ms against 6 ms to expand a 12-megapixel frame's grid, measured).
+MAP_CACHE_BYTES = 200 * 2**20
+#: Bytes of big frames' grids (:meth:`LensDistortion.grid`, a sixteenth of their maps) a
+#: process keeps for poses it may see again: 8 poses of a 12-megapixel frame (6 MB each), whose
+#: maps are then only expanded, the lens model not evaluated again.
+GRID_CACHE_BYTES = 48 * 2**20
+
+
+class _MapCache:
+    """A process's maps by (camera, pose, frame), least recently used first out, within
+    :data:`MAP_CACHE_BYTES`: a pan-tilt unit revisits the same poses thousands of times.
+    Big frames' maps are :attr:`last` only (the memory of one frame's maps, reused), and
+    their grids are kept within ``grid_budget`` (:attr:`grids`)."""
+
+    def __init__(self, budget: int, grid_budget: int = GRID_CACHE_BYTES) -> None:
+        self.budget = budget
+        self.grid_budget = grid_budget
+        self.entries: OrderedDict[tuple, tuple[np.ndarray, np.ndarray]] = OrderedDict()
+        self.grids: OrderedDict[tuple, tuple[np.ndarray, np.ndarray]] = OrderedDict()
+        self.last: tuple[tuple, tuple[np.ndarray, np.ndarray]] | None = None
+        self.hits = self.misses = 0
+
+    def get(self, lens: LensDistortion, homography: np.ndarray, size: tuple[int, int]):
+        key = (lens, homography.tobytes(), size)
+        if self.last is not None and self.last[0] == key:
+            self.hits += 1
+            return self.last[1]
+        if key in self.entries:
+            self.hits += 1
+            self.entries.move_to_end(key)
+            return self.entries[key]
+        step = map_step(size)
+        if size[0] * size[1] * 8 > self.budget // 4 and step > 1:  # 2 float maps
+            reuse = self.last[1] if self.last is not None and self.last[0][2] == size else None
+            self.last = None  # a frame of another size: its memory goes first
+            grid = self.grids.get(key)
+            if grid is None:
+                self.misses += 1
+                grid = lens.grid(homography, size, step)
+                self.grids[key] = grid
+                while len(self.grids) > 1 and sum(
+                        a.nbytes + b.nbytes for a, b in self.grids.values()) > self.grid_budget:
+                    self.grids.popitem(last=False)
+            else:
+                self.hits += 1
+                self.grids.move_to_end(key)
+            maps = lens.expand(grid, size, step, reuse)
+            self.last = key, maps
+            return maps
+        self.misses += 1
+        maps = lens.maps(homography, size)
+        self.entries[key] = maps
+        while len(self.entries) > 1 and self._bytes() > self.budget:
+            self.entries.popitem(last=False)
+        return maps
+
+    def _bytes(self) -> int:
+        return sum(a.nbytes + b.nbytes for a, b in self.entries.values())
+
+    def clear(self) -> None:
+        self.entries.clear()
+        self.grids.clear()
+        self.last = None
+        self.hits = self.misses = 0
+
+
+MAP_CACHE = _MapCache(MAP_CACHE_BYTES)
+
+
+@dataclass(frozen=True)
+class PixelMap:
+    """``output (col, row, 1) ~ output_from_input @ input (col, row, 1)`` for an output of
+    ``size = (width, height)`` pixels.
+
+    ``output_from_input`` is scaled so that ``w > 0`` where the wall is visible (as the
+    framing module makes it): output pixels whose source has ``w <= 0`` look beyond the
+    wall's horizon and have no source, like those that map outside the input.
+    """
+
+    output_from_input: Matrix
+    size: tuple[int, int]
+    lens: LensDistortion | None = None  # input pixels are ideal ones distorted by this
+    output_lens: LensDistortion | None = None  # output pixels are, instead (gsrwt render)
+
+    def to_output(self, points: np.ndarray) -> np.ndarray:
+        """``(N, 2)`` input pixels to output pixels."""
+        if self.lens is not None:
+            points = self.lens.undistort(points)
+        output = map_points(self.output_from_input, points)
+        return output if self.output_lens is None else self.output_lens.distort(output)
+
+    def to_input(self, points: np.ndarray) -> np.ndarray:
+        """``(N, 2)`` output pixels to input pixels."""
+        if self.output_lens is not None:
+            points = self.output_lens.undistort(np.asarray(points, dtype=np.float64))
+        ideal = map_points(np.linalg.inv(self.output_from_input), points)
+        return ideal if self.lens is None else self.lens.distort(ideal)
+
+    def _output_lens_maps(self) -> tuple[np.ndarray, np.ndarray]:
+        """Float maps through a lens on the output side: every output pixel undistorted, then
+        back through the homography; beyond the horizon (``w <= 0``) nothing is sampled."""
+        width, height = self.size
+        cols, rows = np.meshgrid(np.arange(width, dtype=np.float64),
+                                 np.arange(height, dtype=np.float64))
+        ideal = self.output_lens.undistort(np.column_stack([cols.ravel(), rows.ravel()]))
+        inverse = np.linalg.inv(self.output_from_input)
+        sources = map_points(inverse, ideal)
+        w = ideal @ inverse[2, :2] + inverse[2, 2]
+        sources[~(w > 0) | ~np.all(np.isfinite(sources), axis=1)] = NO_SOURCE
+        return (sources[:, 0].reshape(height, width).astype(np.float32),
+                sources[:, 1].reshape(height, width).astype(np.float32))
+
+    @property
+    def _homography(self) -> np.ndarray:
+        """``output_from_input`` as the 3x3 float64 array OpenCV and the map cache take."""
+        return np.ascontiguousarray(self.output_from_input, dtype=np.float64)
+
+    def then(self, output_from_output: Matrix, size: tuple[int, int]) -> PixelMap:
+        """This map followed by a homography of the output (a new frame of ``size``)."""
+        if self.output_lens is not None:
+            raise ValueError("a map with a lens on its output side has no other frame")
+        return PixelMap(np.asarray(output_from_output) @ self.output_from_input, size, self.lens)
+
+    def beyond_horizon(self) -> np.ndarray | None:
+        """The output region (pixel-edge coordinates, a convex polygon) whose source lies
+        beyond the vanishing line, ``w <= 0``; None if there is none.
+
+        In the output that region is a half-plane, ``(H^-1)[2] . (col, row, 1) <= 0`` (for
+        ``o ~ H p``, ``(H^-1 o)_3 = 1 / w(p)``), clipped to the output's rectangle.
+        """
+        width, height = self.size
+        line = np.linalg.inv(np.asarray(self.output_from_input, dtype=np.float64))[2]
+        corners = [(-0.5, -0.5), (width - 0.5, -0.5), (width - 0.5, height - 0.5),
+                   (-0.5, height - 0.5)]
+        polygon = _clip_to_half_plane(corners, line)
+        return np.array(polygon) if len(polygon) >= 3 else None
+
+    def sees(self, source_size: tuple[int, int], samples: int = 65) -> bool:
+        """Whether any of the output has a source in an input of ``source_size`` pixels:
+        a point in front of the horizon that maps inside the input's pixel edges.
+
+        Through a pinhole that region of the output is exact: the output's rectangle clipped
+        by five half-planes, all linear in the output point ``o`` for ``G = H^-1``:
+        ``G[2] . o > 0`` (in front of the horizon) and ``-0.5 <= (G[0] . o) / (G[2] . o) <=
+        W - 0.5``, likewise for rows, each multiplied out by the positive ``G[2] . o``. It
+        sees the input if that polygon has an area. Through a lens (or a lens on the output
+        side) ``samples x samples`` output points are mapped back instead.
+        """
+        width, height = self.size
+        source_width, source_height = source_size
+        if self.lens is not None or self.output_lens is not None:
+            cols = np.linspace(-0.5, width - 0.5, samples)
+            rows = np.linspace(-0.5, height - 0.5, samples)
+            outputs = np.stack(np.meshgrid(cols, rows), axis=-1).reshape(-1, 2)
+            with np.errstate(all="ignore"):
+                inverse = np.linalg.inv(np.asarray(self.output_from_input, dtype=np.float64))
+                ideal = outputs if self.output_lens is None else self.output_lens.undistort(
+                    outputs)
+                w = ideal @ inverse[2, :2] + inverse[2, 2]
+                inputs = self.to_input(outputs)
+                inside = ((w > 0) & np.all(np.isfinite(inputs), axis=1)
+                          & (inputs[:, 0] >= -0.5) & (inputs[:, 0] <= source_width - 0.5)
+                          & (inputs[:, 1] >= -0.5) & (inputs[:, 1] <= source_height - 0.5))
+            return bool(np.any(inside))
+        g = np.linalg.inv(np.asarray(self.output_from_input, dtype=np.float64))
+        polygon: list[tuple[float, float]] = [
+            (-0.5, -0.5), (width - 0.5, -0.5), (width - 0.5, height - 0.5),
+            (-0.5, height - 0.5)]
+        for line in (-g[2], -(g[0] + 0.5 * g[2]), g[0] - (source_width - 0.5) * g[2],
+                     -(g[1] + 0.5 * g[2]), g[1] - (source_height - 0.5) * g[2]):
+            polygon = _clip_to_half_plane(polygon, line)
+            if len(polygon) < 3:
+                return False
+        xs, ys = np.array(polygon).T
+        area = 0.5 * abs(float(np.dot(xs, np.roll(ys, -1)) - np.dot(ys, np.roll(xs, -1))))
+        return area > 1e-9
+
+    def shrink(self, step: int = 8, source_size: tuple[int, int] | None = None) -> np.ndarray:
+        """Input pixels per output pixel (the largest singular value of the output-to-input
+        Jacobian) on a grid of every ``step``-th output pixel, shape ``(rows, cols)``.
+
+        With ``source_size`` (the input's width and height), 1 where the output pixel has no
+        source: outside the input nothing is sampled, however much the map shrinks there.
+        """
+        width, height = self.size
+        cols = np.arange(0, width + step - 1, step, dtype=np.float64).clip(max=width - 1)
+        rows = np.arange(0, height + step - 1, step, dtype=np.float64).clip(max=height - 1)
+        grid = np.stack(np.meshgrid(cols, rows), axis=-1).reshape(-1, 2)
+        if self.lens is None:
+            values = local_stretch(np.linalg.inv(self.output_from_input), grid)
+            sources = None
+        else:  # finite differences of the warp's own maps (cached: it has just used them)
+            maps = MAP_CACHE.get(self.lens, self._homography, self.size)
+            col, row = grid.T.astype(np.intp)
+            # one pixel right and down (left and up on the last column and row)
+            across = np.where(col + 1 < width, 1, -1) if width > 1 else np.zeros_like(col)
+            along = np.where(row + 1 < height, 1, -1) if height > 1 else np.zeros_like(row)
+
+            def at(rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
+                return np.column_stack([part[rows, cols] for part in maps]).astype(np.float64)
+
+            sources = at(row, col)
+            a, c = ((at(row, col + across) - sources) * across[:, None]).T
+            b, d = ((at(row + along, col) - sources) * along[:, None]).T
+            values = largest_singular_value(a, b, c, d)
+        values = np.nan_to_num(values, nan=1.0, posinf=1.0)
+        if source_size is not None:
+            sources = self.to_input(grid) if sources is None else sources
+            w = grid @ np.linalg.inv(self.output_from_input)[2, :2] + np.linalg.inv(
+                self.output_from_input)[2, 2]
+            inside = (w > 0) & np.all(np.isfinite(sources), axis=1)
+            inside &= (sources[:, 0] >= -0.5) & (sources[:, 0] <= source_size[0] - 0.5)
+            inside &= (sources[:, 1] >= -0.5) & (sources[:, 1] <= source_size[1] - 0.5)
+            values = np.where(inside, values, 1.0)
+        return values.reshape(len(rows), len(cols))
+
+    def warp(
+        self,
+        pixels: np.ndarray,
+        interpolation: int,
+        fill: tuple[float, ...],
+        out: np.ndarray | None = None,
+        antialias: bool = False,
+    ) -> np.ndarray:
+        """Backward-map ``pixels`` into the output in one OpenCV pass (thesis Sec. 5.1).
+
+        ``interpolation``: an OpenCV flag; ``fill``: the 4 channel values of output pixels
+        with no source (outside the input or beyond the horizon); ``out``: an array of the
+        output's shape and type to write into. ``antialias``: where an output pixel spans
+        more than :data:`ANTIALIAS_SHRINK` input pixels, sample a Gaussian pyramid of the
+        input at the level of the local shrink, blended between levels (area filtering
+        without a per-pixel loop); nothing changes, and nothing is spent, where no part of
+        the output shrinks that much.
+        """
+        if self.output_lens is not None:
+            map_x, map_y = self._output_lens_maps()
+            return cv2.remap(pixels, map_x, map_y, interpolation, dst=out,
+                             borderMode=cv2.BORDER_CONSTANT, borderValue=fill)
+        warped = self._resample(pixels, 0, interpolation, fill, out)
+        if antialias:
+            self._antialias(pixels, warped, interpolation, fill)
+        polygon = self.beyond_horizon()
+        if polygon is not None:
+            scale = 256  # 8 fractional bits
+            points = np.round((polygon + 0.5) * scale - 0.5).astype(np.int32)
+            cv2.fillPoly(warped, [points], fill, lineType=cv2.LINE_8, shift=8)
+        return warped
+
+    def _antialias(self, pixels: np.ndarray, warped: np.ndarray, interpolation: int,
+                   fill: tuple[float, ...], step: int = 32) -> None:
+        """Blend coarser pyramid levels into ``warped`` where the map shrinks the input by
+        more than :data:`ANTIALIAS_SHRINK`. Only the output rectangle that needs it, from
+        the input rectangle it comes from, is filtered and resampled."""
+        source_size = (pixels.shape[1], pixels.shape[0])
+        level_grid = pyramid_level(self.shrink(step, source_size))
+        if level_grid.max() <= 0:
+            return
+        rows, cols = np.nonzero(level_grid > 0)
+        width, height = self.size
+        r0, r1 = max(0, rows.min() - 1), min(len(level_grid), rows.max() + 2)
+        c0, c1 = max(0, cols.min() - 1), min(len(level_grid[0]), cols.max() + 2)
+        x0, x1 = c0 * step, min(width, (c1 - 1) * step + 1)
+        y0, y1 = r0 * step, min(height, (r1 - 1) * step + 1)
+        region = self.then(np.array([[1.0, 0, -x0], [0, 1.0, -y0], [0, 0, 1]]), (x1 - x0, y1 - y0))
+        level = cv2.resize(level_grid[r0:r1, c0:c1].astype(np.float32), (x1 - x0, y1 - y0),
+                           interpolation=cv2.INTER_LINEAR)
+        levels = min(int(math.ceil(level.max())), 8)
+        # The input rectangle the region samples, with room for the pyramid's filters, at
+        # offsets that are whole pixels of the coarsest level.
+        corners = np.array([[c, r] for c in np.linspace(0, x1 - x0 - 1, 17)
+                            for r in np.linspace(0, y1 - y0 - 1, 17)])
+        sources = region.to_input(corners)
+        sources = sources[np.all(np.isfinite(sources), axis=1)]
+        if len(sources) == 0:
+            return
+        unit, margin = 2**levels, 4 * 2**levels
+        left = int(max(0, (np.floor(sources[:, 0].min()) - margin) // unit * unit))
+        top = int(max(0, (np.floor(sources[:, 1].min()) - margin) // unit * unit))
+        right = int(min(source_size[0], np.ceil(sources[:, 0].max()) + margin))
+        bottom = int(min(source_size[1], np.ceil(sources[:, 1].max()) + margin))
+        if right <= left or bottom <= top:
+            return
+        crop = pixels[top:bottom, left:right]
+        target = warped[y0:y1, x0:x1]
+        # Coarser levels repeat the image's edge outward, so that their blur does not pull
+        # the fill (or transparency) inward; outside the image the output stays the fill.
+        inside = np.full(pixels.shape[:2], 255, np.uint8)
+        outside = region._resample(inside, 0, cv2.INTER_LINEAR, (0.0,) * 4, None) == 0
+        pyramid = crop
+        for index in range(1, levels + 1):
+            pyramid = cv2.pyrDown(pyramid)
+            coarser = region._resample(pyramid, index, interpolation, fill, None,
+                                       cv2.BORDER_REPLICATE, (left, top))
+            weight = np.clip(level - (index - 1), 0.0, 1.0)
+            weight[outside] = 0.0
+            _blend(target, coarser, weight)
+
+    def _resample(self, pixels: np.ndarray, level: int, interpolation: int,
+                  fill: tuple[float, ...], out: np.ndarray | None,
+                  border: int = cv2.BORDER_CONSTANT,
+                  offset: tuple[int, int] = (0, 0)) -> np.ndarray:
+        """One OpenCV pass from pyramid ``level`` of the input (``2^level`` pixels per pixel,
+        centres at ``(p + 0.5) / 2^level - 0.5``), or of the part of the input whose first
+        pixel is ``offset`` (column, row)."""
+        homography = self._homography
+        factor = 0.5**level
+        if self.lens is None:
+            if offset != (0, 0):
+                homography = homography @ np.array(
+                    [[1.0, 0.0, offset[0]], [0.0, 1.0, offset[1]], [0.0, 0.0, 1.0]])
+            if level:
+                level_from_input = np.array([[factor, 0.0, 0.5 * factor - 0.5],
+                                             [0.0, factor, 0.5 * factor - 0.5],
+                                             [0.0, 0.0, 1.0]])
+                homography = homography @ np.linalg.inv(level_from_input)
+            return cv2.warpPerspective(pixels, homography, self.size, dst=out,
+                                       flags=interpolation, borderMode=border,
+                                       borderValue=fill)
+        # one pass: output -> wall -> camera ray -> lens -> input pixel
+        map_x, map_y = MAP_CACHE.get(self.lens, homography, self.size)
+        if level or offset != (0, 0):
+            map_x = (map_x - offset[0] + 0.5) * factor - 0.5
+            map_y = (map_y - offset[1] + 0.5) * factor - 0.5
+        return cv2.remap(pixels, map_x, map_y, interpolation, dst=out, borderMode=border,
+                         borderValue=fill)
+
+    def table_columns(self) -> dict[str, object]:
+        """The rectify table's geometry columns: ``out_width``, ``out_height``, ``homography``
+        (9 numbers row-major, scaled so that ``w = 1`` at the principal point)."""
+        return {
+            "out_width": self.size[0],
+            "out_height": self.size[1],
+            "homography": " ".join(f"{value:.12g}" for value in self.output_from_input.ravel()),
+        }
+
+
+#: Output pixels spanning more input pixels than this are filtered (``antialias``).
+ANTIALIAS_SHRINK = 1.5
+
+
+def pyramid_level(shrink: np.ndarray) -> np.ndarray:
+    """The pyramid level to sample at a local shrink: 0 up to :data:`ANTIALIAS_SHRINK`,
+    rising smoothly to level 1 at a shrink of 2, then ``log2(shrink)`` (a level-``l`` pixel
+    is ``2^l`` input pixels)."""
+    start = math.log2(ANTIALIAS_SHRINK)
+    logarithm = np.log2(np.maximum(shrink, 1.0))
+    ramp = np.clip((logarithm - start) / (1.0 - start), 0.0, 1.0)
+    return np.where(logarithm >= 1.0, logarithm, ramp)
+
+
+def _blend(into: np.ndarray, other: np.ndarray, weight: np.ndarray) -> None:
+    """``into = (1 - weight) into + weight other``, per pixel, in place."""
+    if into.dtype in (np.uint8, np.float32):
+        into[...] = cv2.blendLinear(into, other, (1.0 - weight).astype(np.float32),
+                                    weight.astype(np.float32))
+        return
+    weights = weight[..., None] if into.ndim == 3 else weight
+    mixed = into.astype(np.float32) * (1.0 - weights) + other.astype(np.float32) * weights
+    if np.issubdtype(into.dtype, np.integer):
+        mixed = np.rint(mixed)
+    into[...] = mixed.astype(into.dtype)
+
+
+def _clip_to_half_plane(polygon: list[tuple[float, float]], line: np.ndarray):
+    """The part of a convex polygon where ``line . (x, y, 1) <= 0`` (Sutherland-Hodgman)."""
+    clipped = []
+    count = len(polygon)
+    for index in range(count):
+        current, following = polygon[index], polygon[(index + 1) % count]
+        d_current = line[0] * current[0] + line[1] * current[1] + line[2]
+        d_following = line[0] * following[0] + line[1] * following[1] + line[2]
+        if d_current <= 0:
+            clipped.append(current)
+        if (d_current <= 0) != (d_following <= 0):
+            t = d_current / (d_current - d_following)
+            clipped.append(
+                (
+                    current[0] + t * (following[0] - current[0]),
+                    current[1] + t * (following[1] - current[1]),
+                )
+            )
+    return clipped

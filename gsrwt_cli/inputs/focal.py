@@ -1,0 +1,34 @@
+"""Where an image's focal length comes from: the values given for it, or its EXIF."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+from ..imaging.images import image_file_size
+from ..io.storage import Location, open_input
+from .exif import ExifFocal, focal_from_exif
+
+
+def focal_source(values: Mapping[str, Any], where: str) -> str | None:
+    """Where a job's focal length comes from: ``option``, ``sidecar`` (a sidecar row or the
+    YAML beside the image), ``camera`` (a calibration file), or None: nowhere yet (EXIF)."""
+    if any(values.get(name) not in (None, "") for name in ("focal", "fx", "fy", "focal_mm")):
+        return "option" if where == "options" else "sidecar"
+    if values.get("camera"):
+        return "camera"
+    return None
+
+
+def exif_focal(path: Path | Location) -> ExifFocal | None:
+    """The focal length the image's EXIF gives (:func:`~gsrwt_cli.inputs.exif.focal_from_exif`)."""
+    try:
+        size = image_file_size(path)
+        if size is None:
+            return None
+        with open_input(path) as handle:
+            head = handle.read(1 << 20)  # EXIF lives in the first 64 KB segment
+    except OSError:
+        return None
+    return focal_from_exif(head, *size)
