@@ -31,6 +31,7 @@ from ..inputs.focal import exif_focal, focal_source
 from ..inputs.records import GSRWT_FIELDS, POSE_FIELDS, SENSOR_FIELDS, view_from_values
 from ..io.outputs import write_atomic
 from .executor import ProcessExecutor
+from .in_order import run_in_order
 from .job_errors import error_text
 
 #: Columns of ``gsrwt estimate`` (a public contract, documented in the README).
@@ -246,39 +247,24 @@ def run_estimates(jobs: list[EstimateJob], options: EstimateOptions, processes: 
     stopped, every job still gets its row (``interrupted`` for those not done) and the
     exception goes on."""
     failed = 0
-    rows: dict[int, dict[str, Any]] = {}
-    following = 0
 
     def died(job: EstimateJob, reason: str) -> dict[str, Any]:
         return {"image": job.name, "status": "error", "error": reason}
 
-    def emit() -> None:
-        nonlocal following, failed
-        while following in rows:
-            done = rows.pop(following)
-            following += 1  # first: a stop during on_row must not row this image again
-            failed += done.get("status") != "ok"
-            on_row(done)
+    def stopped(index: int) -> dict[str, Any]:
+        return {"image": jobs[index].name, "status": "interrupted",
+                "error": "not done: the run was interrupted"}
+
+    def deliver(row: dict[str, Any]) -> None:
+        nonlocal failed
+        failed += row.get("status") != "ok"
+        on_row(row)
 
     executor: ProcessExecutor[EstimateJob, dict[str, Any]] = ProcessExecutor(
         EstimateWorker.in_own_process, (options, picture_root, 1 if processes > 1 else 0),
         max(1, min(processes, len(jobs))), on_death=died,
         context=context,
     )
-    results = executor.map_unordered(jobs)
-    try:
-        for index, row in results:
-            rows[index] = row
-            if on_progress is not None:
-                on_progress()
-            emit()
-    except BaseException:
-        results.close()  # stops the workers
-        for index in range(following, len(jobs)):
-            rows.setdefault(index, {"image": jobs[index].name, "status": "interrupted",
-                                    "error": "not done: the run was interrupted"})
-        emit()
-        raise
-    finally:
-        results.close()
+    run_in_order(len(jobs), executor.map_unordered(jobs), deliver, stopped,
+                 on_progress=on_progress)
     return failed

@@ -43,6 +43,7 @@ from ..io.outputs import OutsideOutputError, check_inside, remove_stale_temporar
 from ..io.storage import Location, fetched, is_url, open_input
 from ..tables.rows import PARAMS_COLUMNS, params_row
 from .executor import Executor, ProcessExecutor
+from .in_order import run_in_order
 from .job_errors import JobError, error_text
 from .reruns import differences, is_regular_file, made_with, record_of
 from .settings import Describe, Settings  # noqa: F401  (named here too)
@@ -456,15 +457,13 @@ def run_batch(
     (:func:`interrupted_row`), and the exception goes on.
     """
     counts = Counts()
-    rows: dict[int, dict[str, Any]] = {}
-    state = {"next": 0}
-
     if not settings.overwrite:
         jobs = [replace(job, record=record_of(
                     (previous or {}).get((str(job.source), str(job.output))), job.output,
                     RECTIFY_COLUMNS)) if job.existed else job for job in jobs]
 
-    def parent_row(job: Job) -> dict[str, Any]:
+    def parent_row(index: int) -> dict[str, Any]:
+        job = jobs[index]
         if job.record is None:
             return process_job(job, settings)
         change = differences(job.record["made_with"], _made_with(job, settings) or "")
@@ -474,24 +473,12 @@ def run_batch(
                 "--overwrite to redo it"
         return {**job.record, "status": "error", "error": one_line(error, 500)}
 
-    def emit_ready(fill: Callable[[Job], dict[str, Any]] | None = None) -> None:
-        while state["next"] < len(jobs):
-            index = state["next"]
-            if index not in rows:
-                if index not in parent_jobs and fill is None:
-                    return
-                rows[index] = (fill or parent_row)(jobs[index])
-                if on_progress is not None:
-                    on_progress()
-            row = rows.pop(index)
-            counts.add(row)
-            on_row(row)
-            state["next"] += 1
+    def deliver(row: dict[str, Any]) -> None:
+        counts.add(row)
+        on_row(row)
 
-    def is_parent_job(job: Job) -> bool:
-        return job.error is not None or job.record is not None
-
-    parent_jobs = {index for index, job in enumerate(jobs) if is_parent_job(job)}
+    parent_jobs = {index for index, job in enumerate(jobs)
+                   if job.error is not None or job.record is not None}
     worker_jobs = [index for index in range(len(jobs)) if index not in parent_jobs]
     if executor is None:
         executor = ProcessExecutor(
@@ -501,21 +488,10 @@ def run_batch(
             on_abandon=_remove_temporaries_of,
             context=context or worker_context(),
         )
-    results = executor.map_unordered([jobs[index] for index in worker_jobs])
-    try:
-        emit_ready()
-        for position, row in results:
-            rows[worker_jobs[position]] = row
-            if on_progress is not None:
-                on_progress()
-            emit_ready()
-        emit_ready()
-    except BaseException:
-        results.close()  # stops the workers, removes what they left half-written
-        emit_ready(lambda job: parent_row(job) if is_parent_job(job) else interrupted_row(
-            job, settings))
-        raise
-    finally:
-        results.close()
+    run_in_order(
+        len(jobs), executor.map_unordered([jobs[index] for index in worker_jobs]), deliver,
+        lambda index: interrupted_row(jobs[index], settings), index_of=worker_jobs.__getitem__,
+        parent=parent_jobs, parent_row=parent_row, on_progress=on_progress,
+    )
     return counts
 

@@ -1,0 +1,74 @@
+"""Rows in input order from work that finishes in any order: the one runner of every batch.
+
+``gsrwt rectify`` and ``gsrwt estimate`` hand images to an executor's workers, whose rows come
+back as they finish; the table wants them in input order, and a stopped run still wants a
+row for every image. :func:`run_in_order` is that loop, once.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Collection, Generator
+from typing import Any
+
+Row = dict[str, Any]
+
+
+def run_in_order(
+    count: int,
+    results: Generator[tuple[int, Row], None, None],
+    on_row: Callable[[Row], None],
+    stopped_row: Callable[[int], Row],
+    *,
+    index_of: Callable[[int], int] = int,
+    parent: Collection[int] = (),
+    parent_row: Callable[[int], Row] | None = None,
+    on_progress: Callable[[], None] | None = None,
+) -> None:
+    """Hand ``on_row`` the row of every index ``0 .. count - 1``, in order.
+
+    ``results`` yields ``(position, row)`` as workers finish, in any order; ``index_of``
+    turns a position into its index. The indices in ``parent`` need no worker: their rows
+    are made here by ``parent_row`` when their turn comes. A row waits until the rows before
+    it are out; ``on_progress`` is called as each is made.
+
+    If anything stops the run (an exception such as ``KeyboardInterrupt``, from the results
+    or from ``on_row``), ``results`` is closed (which stops its workers), every index not yet
+    out gets its row (``parent_row`` for the parent's, ``stopped_row`` for the others) and
+    the exception goes on. An index counts as out before ``on_row`` sees its row, so a stop
+    inside ``on_row`` never rows an image twice.
+    """
+    rows: dict[int, Row] = {}
+    following = 0
+
+    def made(row: Row) -> Row:
+        if on_progress is not None:
+            on_progress()
+        return row
+
+    def emit(stopped: bool = False) -> None:
+        nonlocal following
+        while following < count:
+            index = following
+            if index not in rows:
+                if index in parent and parent_row is not None:
+                    rows[index] = made(parent_row(index))
+                elif stopped:
+                    rows[index] = stopped_row(index)
+                else:
+                    return
+            row = rows.pop(index)
+            following += 1
+            on_row(row)
+
+    try:
+        emit()
+        for position, row in results:
+            rows[index_of(position)] = made(row)
+            emit()
+        emit()
+    except BaseException:
+        results.close()  # stops the workers (and removes what they left half-written)
+        emit(stopped=True)
+        raise
+    finally:
+        results.close()

@@ -1,0 +1,61 @@
+"""The one runner of every batch (:func:`gsrwt_cli.batch.in_order.run_in_order`): rows in
+input order from results in any order, parent rows made in turn, and a row for every index
+however the run stops."""
+
+from __future__ import annotations
+
+import pytest
+
+from gsrwt_cli.batch.in_order import run_in_order
+
+
+def finishing(order: list[int], closed: list[bool]):
+    """Results of the indices in ``order`` (the order workers finish in), noting its close."""
+    try:
+        for index in order:
+            yield index, {"index": index, "status": "ok"}
+    finally:
+        closed.append(True)
+
+
+def test_rows_come_out_in_input_order_with_parent_rows_in_their_turn():
+    out, closed, progress = [], [], []
+    run_in_order(6, finishing([4, 0, 2, 5], closed), out.append,
+                 lambda index: pytest.fail("nothing stopped"),
+                 parent={1, 3}, parent_row=lambda index: {"index": index, "status": "parent"},
+                 on_progress=lambda: progress.append(1))
+    assert [row["index"] for row in out] == [0, 1, 2, 3, 4, 5]
+    assert [row["status"] for row in out] == ["ok", "parent", "ok", "parent", "ok", "ok"]
+    assert closed and len(progress) == 6
+
+
+def test_positions_map_to_indices():
+    out, closed = [], []
+    workers = [1, 3]  # the jobs that went to workers; the others are the parent's
+    run_in_order(4, finishing([1, 0], closed), out.append, lambda index: {},
+                 index_of=workers.__getitem__, parent={0, 2},
+                 parent_row=lambda index: {"index": index, "status": "parent"})
+    # Worker rows carry their position: position 0 is job 1, position 1 is job 3.
+    assert [(row["index"], row["status"]) for row in out] == [
+        (0, "parent"), (0, "ok"), (2, "parent"), (1, "ok")]
+
+
+def test_a_stop_rows_every_index_once_and_stops_the_workers():
+    """A stop inside ``on_row`` (Ctrl-C while a row is written) leaves that row written
+    once; the rest, even a result not yet read, get their stopped (or parent) rows; the
+    exception goes on."""
+    out, closed = [], []
+
+    def on_row(row):
+        out.append(row)
+        if row["index"] == 2:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        run_in_order(6, finishing([0, 1, 2, 3], closed), on_row,
+                     lambda index: {"index": index, "status": "interrupted"},
+                     parent={4}, parent_row=lambda index: {"index": index, "status": "parent"})
+    assert [row["index"] for row in out] == [0, 1, 2, 3, 4, 5]
+    assert [row["status"] for row in out] == ["ok"] * 3 + ["interrupted", "parent",
+                                                            "interrupted"]
+    assert closed
