@@ -23,11 +23,10 @@ from ..geometry.camera import Intrinsics
 from ..imaging.images import (
     DEFAULT_MAX_INPUT_PIXELS,
     encode_image,
-    image_file_size,
     keep_freed_memory,
     read_image,
 )
-from ..inputs.focal import exif_focal, focal_source
+from ..inputs.focal import with_focal
 from ..inputs.records import GSRWT_FIELDS, POSE_FIELDS, SENSOR_FIELDS, view_from_values
 from ..io.outputs import write_atomic
 from .executor import ProcessExecutor
@@ -66,16 +65,9 @@ def camera_for(path: Path, values: Mapping[str, Any], where: str
     comes from (``option``, ``sidecar``, ``camera``, ``exif``, or ``estimated`` when nothing
     gives one: then the intrinsics are None), and the principal point given without a focal
     length. Raises :class:`~gsrwt_cli.inputs.records.RecordError` for a bad value."""
-    own = {name: value for name, value in values.items() if name not in _POSE_VALUES}
-    source = focal_source(own, where)
-    if own.get("focal_mm") not in (None, "") and own.get("width") in (None, ""):
-        size = image_file_size(path)
-        if size is not None:
-            own["width"], own["height"] = size
-    if source is None:
-        found = exif_focal(path)
-        if found is not None:
-            own["fx"], own["fy"], source = found.fx, found.fy, "exif"
+    own, source = with_focal(
+        path, {name: value for name, value in values.items() if name not in _POSE_VALUES},
+        where)
     if source is None:
         view = view_from_values({**own, "pan": 0, "tilt": 0, "focal": 1.0}, where)
         given = own.get("cx") not in (None, "")

@@ -34,7 +34,7 @@ from ..imaging.images import (
     keep_freed_memory,
     measure_image_file,
 )
-from ..inputs.focal import exif_focal, focal_source
+from ..inputs.focal import with_focal
 from ..inputs.parameters import Found, NotFound, Problem, resolve_parameters
 from ..inputs.records import RecordError, view_from_values
 from ..inputs.sidecar import Sidecar
@@ -162,20 +162,12 @@ def _view(job: Job, estimate: bool = True) -> tuple[View, str, dict[str, Any]]:
         except RecordError as error:
             raise JobError(str(error)) from None
         return view, found, {"pose_source": "estimated", "confidence": confidence}
-    values, source = dict(job.values), focal_source(job.values, job.where)
-    if values.get("focal_mm") not in (None, "") and values.get("width") in (None, ""):
-        size = image_file_size(job.source)  # millimetres become pixels with the image's size
-        if size is not None:
-            values["width"], values["height"] = size
+    values, source = with_focal(job.source, job.values, job.where)
     if source is None:
-        found = exif_focal(job.source)
-        if found is None:
-            raise JobError(
-                "no focal length: none in the parameters, no camera file, and no usable "
-                "focal length in the image's EXIF"
-            )
-        values["fx"], values["fy"] = found.fx, found.fy
-        source = "exif"
+        raise JobError(
+            "no focal length: none in the parameters, no camera file, and no usable "
+            "focal length in the image's EXIF"
+        )
     try:
         return view_from_values(values, job.where), source, {"pose_source": job.pose_source}
     except RecordError as error:

@@ -32,3 +32,22 @@ def exif_focal(path: Path | Location) -> ExifFocal | None:
     except OSError:
         return None
     return focal_from_exif(head, *size)
+
+
+def with_focal(path: Path | Location, values: Mapping[str, Any], where: str
+               ) -> tuple[dict[str, Any], str | None]:
+    """An image's values with its focal length resolved, the one way every command does it:
+    the values' own (:func:`focal_source`), else the image's EXIF (``fx``, ``fy`` added;
+    source ``exif``); a focal length in millimetres gets the image's size, which it needs.
+    Returns the values and the source, None when nothing gives a focal length."""
+    values = dict(values)
+    source = focal_source(values, where)
+    if values.get("focal_mm") not in (None, "") and values.get("width") in (None, ""):
+        size = image_file_size(path)  # millimetres become pixels with the image's size
+        if size is not None:
+            values["width"], values["height"] = size
+    if source is None:
+        found = exif_focal(path)
+        if found is not None:
+            values["fx"], values["fy"], source = found.fx, found.fy, "exif"
+    return values, source
