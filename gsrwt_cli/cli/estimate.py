@@ -21,17 +21,18 @@ from ..io.storage import location
 from ..io.targets import Drawings
 from ..tables.writer import FORMATS, TableWriter, format_from_extension
 from .options import (
-    MAX_JOBS,
     VIEW_OPTIONS,
     InputError,
-    Integer,
     LocalPath,
     Number,
     PathOrUrl,
     field_options,
+    jobs_option,
     load_sidecar_option,
     make_output_directory,
+    max_input_pixels_option,
     prepare_table,
+    quiet_option,
     report_error,
     resolve_format,
     view_defaults,
@@ -83,11 +84,9 @@ camera_options = field_options(
 @click.option("--draw", type=LocalPath(file_okay=False),
               help="Write a picture per image (DIR/NAME.png): segments by direction, the "
                    "horizon, the frontal view's outline.")
-@click.option("--max-input-pixels", default="300M", show_default=True,
-              help="Refuse, before decoding it, an input whose header claims more pixels.")
-@click.option("-j", "--jobs", type=Integer(1, MAX_JOBS), default=None,
-              help="Worker processes [default: all cores].")
-@click.option("-q", "--quiet", is_flag=True, help="No summary on stderr.")
+@max_input_pixels_option
+@jobs_option
+@quiet_option("No summary on stderr.")
 def estimate(inputs: tuple[str, ...], output: str | None, fmt: str | None, recursive: bool,
              sidecar: Path | None, min_confidence: float, wall: str, draw: Path | None,
              max_input_pixels: str, jobs: int | None, quiet: bool, **camera: Any) -> None:

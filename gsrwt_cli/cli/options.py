@@ -298,6 +298,24 @@ def quality_option(func: F) -> F:
                         help="JPEG and WebP quality.")(func)
 
 
+def jobs_option(func: F) -> F:
+    """``-j/--jobs``: worker processes (at most :data:`MAX_JOBS`)."""
+    return click.option("-j", "--jobs", type=Integer(1, MAX_JOBS), default=None,
+                        help="Worker processes [default: all cores].")(func)
+
+
+def max_input_pixels_option(func: F) -> F:
+    """``--max-input-pixels``: inputs whose header claims more pixels are refused undecoded."""
+    return click.option("--max-input-pixels", default="300M", show_default=True,
+                        help="Refuse, before decoding it, an input whose header claims more "
+                             "pixels.")(func)
+
+
+def quiet_option(what: str) -> Callable[[F], F]:
+    """``-q/--quiet``: ``what`` the command leaves out (its summary, its progress bar)."""
+    return click.option("-q", "--quiet", is_flag=True, help=what)
+
+
 def edge_threshold_option(func: F, default: float | None = None,
                           text: str = "Sobel magnitude of an edge pixel.") -> F:
     """``--edge-threshold``: the Sobel magnitude of an edge pixel (lines, match); ``default``

@@ -51,7 +51,6 @@ from ..geometry.framing import (
     OutputTooLargeError,
 )
 from ..imaging.images import (
-    INTERPOLATIONS,
     ImageError,
     ImageFormatError,
     canonical_extension,
@@ -76,14 +75,18 @@ from ..tables.writer import (
     shard_table_name,
 )
 from .options import (
-    MAX_JOBS,
     InputError,
     Integer,
     Number,
     PathOrUrl,
+    interpolation_option,
+    jobs_option,
     load_sidecar_option,
+    max_input_pixels_option,
     prepare_directory,
     prepare_table,
+    quality_option,
+    quiet_option,
     view_defaults,
     view_options,
 )
@@ -475,10 +478,8 @@ def dask_executor(address: str, processes: int, retries: int,
 @click.option("--max-size", default=None, metavar="WxH",
               help="Lower the scale so that the output fits in WxH pixels (the table's "
                    "'scale' says what was used), instead of a larger output.")
-@click.option("--max-input-pixels", default="300M", show_default=True,
-              help="Refuse, before decoding it, an input whose header claims more pixels.")
-@click.option("--interpolation", type=click.Choice(tuple(INTERPOLATIONS)), default="linear",
-              show_default=True)
+@max_input_pixels_option
+@interpolation_option
 @click.option("--fill", type=Number(), default=0.0, show_default=True,
               help="Value of pixels with no source, in the image's units (0-255, 0-65535).")
 @click.option("--antialias/--no-antialias", default=True, show_default=True,
@@ -488,13 +489,11 @@ def dask_executor(address: str, processes: int, retries: int,
               help="Make pixels with no source transparent (adds an alpha channel).")
 @click.option("--ext", default=None,
               help="Write this format (jpg, png, tif, webp, bmp) [default: the input's].")
-@click.option("--quality", type=Integer(1, 100), default=95, show_default=True,
-              help="JPEG and WebP quality.")
+@quality_option
 @click.option("--table", "table_path", default=None,
               help="Where to write the table (.csv, .tsv, .json, .jsonl; - for stdout) "
                    "[default: OUTDIR/gsrwt.csv].")
-@click.option("-j", "--jobs", type=Integer(1, MAX_JOBS), default=None,
-              help="Worker processes [default: all cores].")
+@jobs_option
 @click.option("--overwrite", is_flag=True, help="Replace existing outputs instead of skipping.")
 @click.option("--dry-run", is_flag=True,
               help="Check everything and write the table only (status `planned`).")
@@ -512,7 +511,7 @@ def dask_executor(address: str, processes: int, retries: int,
                    "jobs, CI matrices); K and N in ASCII digits, 1 <= K <= N <= 1000000; the "
                    "table is OUTDIR/gsrwt.K-of-N.csv; join the tables with 'gsrwt tables "
                    "merge'.")
-@click.option("-q", "--quiet", is_flag=True, help="No progress bar and no summary.")
+@quiet_option("No progress bar and no summary.")
 @click.option("--auto", is_flag=True,
               help="Estimate the pose of images that no source gives pan and tilt for, from "
                    "their own lines (as 'gsrwt estimate'; the focal length too if unknown).")

@@ -27,7 +27,7 @@ from ..tables.writer import (
     read_shard_table,
     write_merged,
 )
-from .options import InputError, prepare_table
+from .options import InputError, prepare_table, quiet_option
 
 MACHINE_FORMATS = ("csv", "tsv", "json", "jsonl")
 
@@ -91,7 +91,7 @@ def tables() -> None:
 @click.option("-o", "--output", "output", required=True,
               help="The merged table (.csv, .tsv, .json, .jsonl; - for stdout); a path or a "
                    "URL, as are the TABLEs.")
-@click.option("-q", "--quiet", is_flag=True, help="No summary.")
+@quiet_option("No summary.")
 def merge(shard_tables: tuple[str, ...], output: str, quiet: bool) -> None:
     """Join the tables of `gsrwt rectify --shard K/N` runs into one, in input order.
 
