@@ -37,8 +37,8 @@ def view_for_image(view: View, width: int, height: int) -> View:
 def resolve_scale(view: View, scale: float = 1.0, px_per_unit: float | None = None) -> float:
     """Output pixels per frontal pixel; ``px_per_unit`` asks for N pixels per unit of distance.
 
-    One frontal pixel covers ``Zc / f`` wall units (spec section 5), so N pixels per unit is a
-    scale of ``N Zc / f``.
+    One frontal pixel covers ``Zc / f`` wall units (Eq. 4.25 at frontal resolution), so N
+    pixels per unit is a scale of ``N Zc / f``.
     """
     if px_per_unit is None:
         return scale

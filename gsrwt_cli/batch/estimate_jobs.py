@@ -47,7 +47,7 @@ _POSE_VALUES = ("pan", "tilt", "roll", *GSRWT_FIELDS, *POSE_FIELDS)
 @dataclass(frozen=True)
 class EstimateOptions:
     """How poses are estimated: results below ``min_confidence`` are errors; ``wall`` is
-    ``frontal`` (spec section 7) or ``dominant`` (:func:`~gsrwt_cli.api.estimate.
+    ``frontal`` (``|pan| <= 45``) or ``dominant`` (:func:`~gsrwt_cli.api.estimate.
     world_from_camera_of`)."""
 
     min_confidence: float = 0.0
