@@ -127,7 +127,7 @@ def test_every_readme_command_runs(tmp_path):
 
 @pytest.mark.slow
 def test_development_commands_run(tmp_path):
-    """The README's development block: benchmarks (small), sample regeneration, lint."""
+    """docs/DEVELOPMENT.md's block: benchmarks (small), sample regeneration, lint."""
     (block,) = [b for b in sh_blocks(PAGES["docs/DEVELOPMENT.md"])
                 if any("make_samples" in line for line in b)]
     copy = tmp_path / "repo"

@@ -33,7 +33,7 @@ from ..io.outputs import write_atomic
 from .executor import ProcessExecutor
 from .job_errors import error_text
 
-#: Columns of ``gsrwt estimate`` (a public contract, documented in the README).
+#: Columns of ``gsrwt estimate`` (a public contract, documented in docs/COMMANDS.md).
 ESTIMATE_COLUMNS = (
     "image", "pan", "tilt", "roll", "focal", "fx", "fy", "cx", "cy", "width", "height",
     "confidence", "segments", "inliers", "focal_source",
