@@ -16,7 +16,7 @@ from pathlib import Path
 import cv2
 
 from gsrwt_cli import View
-from gsrwt_cli.api.rectify import rectify_image
+from gsrwt_cli.api.rectify import Framing, rectify_image
 from gsrwt_cli.vision.edges import line_edges
 from gsrwt_cli.vision.landmarks import build_template, match_template
 
@@ -26,7 +26,7 @@ SAMPLES = Path(__file__).resolve().parent.parent / "sample_data"
 def main() -> None:
     cv2.setNumThreads(1)
     image = cv2.imread(str(SAMPLES / "views" / "door_p20_t-8_f800.jpg"))
-    frontal, _ = rectify_image(image, View(20, -8, 800), bbox=(320, 100, 960, 580))
+    frontal, _ = rectify_image(image, View(20, -8, 800), Framing(bbox=(320, 100, 960, 580)))
     grey = cv2.cvtColor(frontal, cv2.COLOR_BGR2GRAY)
     assert grey.shape == (480, 640)
     templates = {}

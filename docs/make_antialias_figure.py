@@ -12,7 +12,7 @@ import cv2
 import numpy as np
 
 from gsrwt_cli import View
-from gsrwt_cli.api.rectify import rectify_image
+from gsrwt_cli.api.rectify import Framing, rectify_image
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -29,8 +29,8 @@ def fine_texture(height: int, width: int) -> np.ndarray:
 def main() -> None:
     image = fine_texture(480, 640)
     view = View(0, 0, 500, width=640, height=480)
-    plain, _ = rectify_image(image, view, scale=0.25, antialias=False)
-    filtered, _ = rectify_image(image, view, scale=0.25, antialias=True)
+    plain, _ = rectify_image(image, view, Framing(scale=0.25), antialias=False)
+    filtered, _ = rectify_image(image, view, Framing(scale=0.25), antialias=True)
     reference = cv2.resize(image, (plain.shape[1], plain.shape[0]), interpolation=cv2.INTER_AREA)
     panels = []
     for label, panel in (("bilinear", plain), ("--antialias", filtered), ("area", reference)):

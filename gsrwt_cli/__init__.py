@@ -10,6 +10,7 @@ __version__ = "0.1.0"
 #: The package's API, each name imported from its module when first used: ``gsrwt --version``
 #: and every command import only what they need (numpy and OpenCV take most of a start-up).
 _API = {
+    "Framing": "geometry.framing",
     "GsrwtParameters": "geometry.gsrwt",
     "Intrinsics": "geometry.camera",
     "Lens": "geometry.camera",

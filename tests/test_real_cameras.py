@@ -342,11 +342,11 @@ def fine_texture(height: int, width: int) -> np.ndarray:
 def antialias_gain(image: np.ndarray, view: View, scale: float):
     """PSNR of plain bilinear and of antialiased rectification against an area-averaged
     reference: the same map applied to a 4x supersampled input, then averaged 4x4."""
-    from gsrwt_cli.api.rectify import rectify_image
+    from gsrwt_cli.api.rectify import Framing, rectify_image
 
-    plain, info = rectify_image(image, view, scale=scale, antialias=False)
-    filtered, _ = rectify_image(image, view, scale=scale, antialias=True)
-    fine, _ = rectify_image(image, view, scale=scale * 4, antialias=False,
+    plain, info = rectify_image(image, view, Framing(scale=scale), antialias=False)
+    filtered, _ = rectify_image(image, view, Framing(scale=scale), antialias=True)
+    fine, _ = rectify_image(image, view, Framing(scale=scale * 4), antialias=False,
                             interpolation="linear")
     height, width = plain.shape[:2]
     reference = cv2.resize(fine, (width, height), interpolation=cv2.INTER_AREA)
@@ -555,12 +555,12 @@ def test_big_frames_revisited_poses_take_their_grid_from_the_cache():
 def test_lens_shrink_from_the_maps_matches_the_lens_projection():
     """The anti-aliasing's shrink through a lens is read off the warp's own maps; it agrees
     with finite differences of the lens projection (cv2.projectPoints) to 1 %."""
-    from gsrwt_cli.api.rectify import plan_image
+    from gsrwt_cli.api.rectify import Framing, plan_image
     from gsrwt_cli.geometry.framing import lens_distortion
     from gsrwt_cli.geometry.gsrwt import largest_singular_value
 
     plan = plan_image(View(55, 10, 700, lens=Lens("plumb_bob", (("k1", -0.25), ("k2", 0.06)))),
-                      1600, 1200, scale=0.4)
+                      1600, 1200, Framing(scale=0.4))
     pixel_map = plan.pixel_map
     shrink = pixel_map.shrink(32)
     width, height = plan.size

@@ -545,3 +545,25 @@ def test_rows_matching_only_by_an_ambiguous_file_name_are_an_error(tmp_path):
     assert result.exit_code == 0, result.output
     table = list(csv.DictReader(io.StringIO((tmp_path / "out2" / "gsrwt.csv").read_text())))
     assert [float(r["pan_deg"]) for r in table] == [1, 3]
+
+
+def test_the_api_frames_as_the_command_does_with_one_framing_object():
+    """``rectify_image`` and ``plan_image`` take the command's whole framing (bbox, scale or
+    pixels per unit, stretch, pixel and size limits) as one frozen ``Framing``: ``max_size``
+    lowers the scale until the output fits, ``px_per_unit`` is N pixels per unit of the
+    distance, and the default is the thesis's frame."""
+    import dataclasses
+
+    from gsrwt_cli import Framing, plan_image, rectify_image
+
+    image = smooth_texture(240, 320, 3)
+    view = View(30, 20, 300, distance=2.0)
+    default, info = rectify_image(image, view)
+    assert info.frame.scale == 1.0 and default.shape[:2] == (240, 320)
+    fitted, info = rectify_image(image, view, Framing(bbox="full", max_size=(100, 80)))
+    assert fitted.shape[0] <= 80 and fitted.shape[1] <= 100 and info.frame.scale < 1.0
+    assert max(fitted.shape[1] / 100, fitted.shape[0] / 80) > 0.97  # the scale is not lowered more
+    metric = plan_image(view, 320, 240, Framing(px_per_unit=150.0))
+    assert metric.frame.scale == pytest.approx(150.0 * 2.0 / 300)  # N Zc / f
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        Framing().scale = 2.0  # type: ignore[misc]

@@ -23,9 +23,10 @@ from typing import Any
 import cv2
 import numpy as np
 
-from ..api.rectify import RectifyInfo, plan_image
+from ..api.rectify import plan_image
 from ..base.messages import one_line
 from ..geometry.camera import View
+from ..geometry.framing import Plan
 from ..imaging.images import (
     Scratch,
     check_writable,
@@ -180,7 +181,7 @@ def _view(job: Job, estimate: bool = True) -> tuple[View, str, dict[str, Any]]:
         raise JobError(str(error)) from None
 
 
-def _geometry(info: RectifyInfo) -> dict[str, Any]:
+def _geometry(info: Plan) -> dict[str, Any]:
     return {
         **params_row(info.view, None),
         **info.pixel_map.table_columns(),
@@ -200,12 +201,8 @@ NOT_MADE_SO = ("its output exists, not made with these options (no valid row of 
 NOT_A_FILE = "its output exists and is not a regular file; remove it or use another -o"
 
 
-def _plan(view: View, width: int, height: int, settings: Settings) -> RectifyInfo:
-    return plan_image(
-        view, width, height, bbox=settings.bbox, scale=settings.scale,
-        px_per_unit=settings.px_per_unit, max_stretch=settings.max_stretch,
-        max_pixels=settings.max_pixels, max_size=settings.max_size,
-    )
+def _plan(view: View, width: int, height: int, settings: Settings) -> Plan:
+    return plan_image(view, width, height, settings.framing)
 
 
 def process_job(job: Job, settings: Settings, scratch: Scratch | None = None) -> dict[str, Any]:

@@ -122,14 +122,15 @@ def made_with(values: Mapping[str, Any] | None, wall: str | None, settings: Sett
         words += _camera_words(str(values["camera"]))
     if wall is not None:
         words.append(("wall", wall))
-    box = settings.bbox
+    framing = settings.framing
+    box = framing.bbox
     words.append(("bbox", box if isinstance(box, str) else ",".join(map(_number, box))))
     if box in ("full", "crop"):
-        words.append(("max_stretch", _number(settings.max_stretch)))
-    words.append(("scale", _number(settings.scale) if settings.px_per_unit is None
-                  else f"{_number(settings.px_per_unit)}px/unit"))
-    if settings.max_size is not None:
-        words.append(("max_size", "x".join(map(str, settings.max_size))))
+        words.append(("max_stretch", _number(framing.max_stretch)))
+    words.append(("scale", _number(framing.scale) if framing.px_per_unit is None
+                  else f"{_number(framing.px_per_unit)}px/unit"))
+    if framing.max_size is not None:
+        words.append(("max_size", "x".join(map(str, framing.max_size))))
     words += [("interpolation", settings.interpolation),
               ("antialias", "on" if settings.antialias else "off"),
               ("fill", _number(settings.fill)), ("alpha", "on" if settings.alpha else "off")]

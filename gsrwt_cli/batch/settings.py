@@ -6,6 +6,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
+from ..geometry.framing import DEFAULT_FRAMING, Framing
 from ..imaging.images import DEFAULT_MAX_INPUT_PIXELS
 from ..io.storage import Location
 
@@ -17,12 +18,7 @@ Describe = Callable[[BaseException], "str | None"]
 class Settings:
     """The options of one ``gsrwt rectify`` run, shared by all workers."""
 
-    bbox: str | tuple[float, float, float, float] = "frontal"
-    scale: float = 1.0
-    px_per_unit: float | None = None
-    max_stretch: float = 4.0
-    max_pixels: float = 50e6
-    max_size: tuple[int, int] | None = None
+    framing: Framing = DEFAULT_FRAMING  # the output's rectangle and size
     interpolation: str = "linear"
     fill: float = 0.0
     alpha: bool = False
@@ -32,5 +28,5 @@ class Settings:
     max_input_pixels: float = DEFAULT_MAX_INPUT_PIXELS
     antialias: bool = True
     root: Path | Location | None = None  # the output directory: nothing is written outside it
-    #: Words an error in the caller's terms (a module-level function: it goes to workers).
+    #: Words an error in the caller's terms (a picklable callable: it goes to workers).
     describe: Describe | None = None

@@ -25,7 +25,6 @@ import click
 from tqdm import tqdm
 
 from ..api.estimate import WALL_CHOICES
-from ..api.rectify import MissingDistanceError
 from ..base.messages import one_line, quote
 from ..base.numerals import parse_decimal, parse_whole
 from ..batch.estimate_jobs import EstimateOptions
@@ -46,6 +45,8 @@ from ..batch.rectify_jobs import (
 from ..geometry.framing import (
     EmptyOutputError,
     FrameOutsideImageError,
+    Framing,
+    MissingDistanceError,
     NothingWithinStretchError,
     OutputTooLargeError,
 )
@@ -624,13 +625,15 @@ def rectify(
                 else previous_rows(default_table, "csv"))
 
     settings = Settings(
-        bbox=box, scale=scale or 1.0, px_per_unit=px_per_unit, max_stretch=max_stretch,
-        max_pixels=pixel_limit, interpolation=interpolation, fill=fill, alpha=alpha,
+        framing=Framing(bbox=box, scale=scale or 1.0, px_per_unit=px_per_unit,
+                        max_stretch=max_stretch, max_pixels=pixel_limit,
+                        max_size=size_limit),
+        interpolation=interpolation, fill=fill, alpha=alpha,
         quality=quality, overwrite=overwrite, dry_run=dry_run,
         max_input_pixels=input_pixel_limit, root=outdir,
         describe=RectifyWording(box if isinstance(box, str) else "box",
                                 px_per_unit is not None, size_limit is not None),
-        antialias=antialias, max_size=size_limit,
+        antialias=antialias,
     )
     processes = jobs or os.cpu_count() or 1
     tqdm.monitor_interval = 0  # no monitor thread: workers may fork from this process

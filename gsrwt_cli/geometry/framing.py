@@ -336,27 +336,62 @@ class Plan:
         return self.pixel_map.output_from_input
 
 
-def plan_output(
-    view: View,
-    bbox: str | tuple[float, float, float, float] = "frontal",
-    scale: float = 1.0,
-    max_stretch: float = 4.0,
-    max_pixels: float = 50e6,
-    max_size: tuple[int, int] | None = None,
-) -> Plan:
-    """Choose the output frame (Fig. 5.7 and ``--bbox``) and compose the one pixel map.
+@dataclass(frozen=True)
+class Framing:
+    """Everything chosen about the output's rectangle and size, passed whole (thesis
+    Fig. 5.7 and the remedies of Fig. 5.2-5.3).
 
-    ``bbox``: ``"frontal"`` (default frame), ``"full"`` (:func:`full_frame`), ``"crop"``
-    (:func:`crop_frame`) or an explicit
-    ``(x0, y0, x1, y1)`` in default-frame pixel edges. ``max_size``: ``(width, height)`` the
-    output must fit in; a larger frame is kept but its ``scale`` lowered until it fits.
+    ``bbox``: ``"frontal"`` (the default frame: the input's size at frontal resolution,
+    centred where the optical axis meets the wall), ``"full"`` (:func:`full_frame`),
+    ``"crop"`` (:func:`crop_frame`) or an explicit ``(x0, y0, x1, y1)`` in default-frame
+    pixel edges. ``scale``: output pixels per frontal pixel, or ``px_per_unit``: output
+    pixels per unit of the wall's distance (needs the view's ``distance``). ``max_stretch``:
+    how much more than the principal point a pixel may be magnified (full, crop).
+    ``max_pixels``: the largest output, in pixels. ``max_size``: ``(width, height)`` the
+    output must fit in; a larger frame is kept but its scale lowered until it fits.
+    """
+
+    bbox: str | tuple[float, float, float, float] = "frontal"
+    scale: float = 1.0
+    px_per_unit: float | None = None
+    max_stretch: float = 4.0
+    max_pixels: float = 50e6
+    max_size: tuple[int, int] | None = None
+
+    def output_scale(self, view: View) -> float:
+        """Output pixels per frontal pixel. One frontal pixel covers ``Zc / f`` wall units,
+        so ``px_per_unit`` N is a scale of ``N Zc / f``."""
+        if self.px_per_unit is None:
+            return self.scale
+        if view.distance is None:
+            raise MissingDistanceError()
+        return self.px_per_unit * view.distance / view.focal
+
+
+#: The default framing: the thesis's frame (Fig. 5.7) at frontal resolution.
+DEFAULT_FRAMING = Framing()
+
+
+class MissingDistanceError(ValueError):
+    """Metric output (pixels per unit of distance) for an image whose distance is unknown."""
+
+    def __init__(self) -> None:
+        super().__init__("metric output needs the camera-to-wall 'distance' of the image")
+
+
+def plan_output(view: View, framing: Framing = DEFAULT_FRAMING) -> Plan:
+    """Choose the output frame as ``framing`` says and compose the one pixel map.
+
     Raises :class:`EmptyOutputError` for an empty output, :class:`OutputTooLargeError` for one
-    larger than ``max_pixels``, :class:`NothingWithinStretchError` for nothing to frame.
+    larger than ``framing.max_pixels``, :class:`NothingWithinStretchError` for nothing to
+    frame, :class:`FrameOutsideImageError` for a frame with no source pixel,
+    :class:`MissingDistanceError` for ``px_per_unit`` without a distance.
     """
     if view.width is None or view.height is None:
         raise ValueError("the image size is needed to frame the output")
+    scale = framing.output_scale(view)
     with np.errstate(all="ignore"):  # non-finite results are checked below, not warned about
-        plan = _plan_output(view, bbox, scale, max_stretch, max_pixels, max_size)
+        plan = _plan_output(view, framing, scale)
     if not np.all(np.isfinite(plan.homography)):
         raise ValueError(
             "the transform is not finite for this view (pan or tilt too close to 90 degrees?)"
@@ -364,14 +399,8 @@ def plan_output(
     return plan
 
 
-def _plan_output(
-    view: View,
-    bbox: str | tuple[float, float, float, float],
-    scale: float,
-    max_stretch: float,
-    max_pixels: float,
-    max_size: tuple[int, int] | None = None,
-) -> Plan:
+def _plan_output(view: View, framing: Framing, scale: float) -> Plan:
+    bbox, max_stretch = framing.bbox, framing.max_stretch
     if bbox == "frontal":
         frame = default_frame(view, scale)
     elif bbox == "full":
@@ -380,13 +409,13 @@ def _plan_output(
         frame = crop_frame(view, max_stretch, scale)
     else:
         frame = Frame(*(float(v) for v in bbox), scale=scale)
-    if max_size is not None:
-        frame = fit_frame(frame, max_size)
+    if framing.max_size is not None:
+        frame = fit_frame(frame, framing.max_size)
     width, height = frame.size
     if width < 1 or height < 1:
         raise EmptyOutputError(width, height)
-    if width * height > max_pixels:
-        raise OutputTooLargeError(width, height, max_pixels)
+    if width * height > framing.max_pixels:
+        raise OutputTooLargeError(width, height, framing.max_pixels)
     homography = frame.output_from_default() @ output_from_input(view)
     pixel_map = PixelMap(homography, (width, height), lens_distortion(view))
     if not sees_within_lens_limit(pixel_map):
