@@ -5,7 +5,7 @@ JPEG), 640x480, pans up to 40 degrees either way, tilts of both signs, rolls up 
 ``tests/estimate_scenes.py`` through OpenCV's own camera; each is estimated with its known
 focal length on one core (OpenCV on one thread), the best CPU time of ``--repeat`` runs
 taken (the machine's cores are shared: wall time measures the neighbours). Errors
-are angles between directions (spec section 7): estimated vs true vertical and wall normal.
+are angles between directions (docs/CONVENTIONS.md): estimated vs true vertical and wall normal.
 Then the same images with no focal length (estimated from the vanishing points), the same
 through a lens the estimator is not told of (k1 = -0.1: how much a camera nobody calibrated
 costs), and the time on 13 real 640x480 photos (OpenCV's chessboard photos in tests/data).

@@ -2,9 +2,9 @@
 poses through OpenCV's own camera (``cv2.projectPoints``, homographies from
 ``cv2.getPerspectiveTransform``), independent of gsrwt's camera code.
 
-Frames: the thesis's world (X up, Y right, Z into the back wall; spec section 1) holds the
+Frames: the thesis's world (X up, Y right, Z into the back wall; docs/CONVENTIONS.md) holds the
 scene; OpenCV's wall frame is ``x = Y, y = -X, z = Z``, and the camera's rotation is built
-here from spec section 6's formula ``world_from_camera = Rx(pan) Ry(tilt) Rz(roll)``.
+here from the formula ``world_from_camera = Rx(pan) Ry(tilt) Rz(roll)``.
 Used by tests/test_estimate*.py and benchmarks/bench_estimate.py.
 """
 
@@ -16,12 +16,12 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-#: OpenCV camera axes -> thesis camera axes (spec section 6), also OpenCV wall -> thesis world.
+#: OpenCV camera axes -> thesis camera axes (docs/CONVENTIONS.md), also OpenCV wall -> thesis world.
 C = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
 
 
 def world_from_camera(pan: float, tilt: float, roll: float) -> np.ndarray:
-    """Spec section 6, written out again: ``Rx(pan) @ Ry(tilt) @ Rz(roll)`` (degrees)."""
+    """docs/CONVENTIONS.md, written out again: ``Rx(pan) @ Ry(tilt) @ Rz(roll)`` (degrees)."""
     a, b, r = (math.radians(v) for v in (pan, tilt, roll))
     rx = np.array([[1, 0, 0], [0, math.cos(a), -math.sin(a)], [0, math.sin(a), math.cos(a)]])
     ry = np.array([[math.cos(b), 0, math.sin(b)], [0, 1, 0], [-math.sin(b), 0, math.cos(b)]])
@@ -67,7 +67,7 @@ class OpenCvCamera:
     def __init__(self, pan: float, tilt: float, roll: float, focal: float,
                  cx: float, cy: float, position: np.ndarray) -> None:
         w = world_from_camera(pan, tilt, roll)
-        camera_from_wall = C.T @ w.T @ C  # OpenCV frames (spec section 6, inverted)
+        camera_from_wall = C.T @ w.T @ C  # OpenCV frames (docs/CONVENTIONS.md, inverted)
         self.rvec = cv2.Rodrigues(camera_from_wall)[0]
         self.position_cv = C.T @ position
         self.tvec = -camera_from_wall @ self.position_cv

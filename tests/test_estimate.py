@@ -1,5 +1,6 @@
-"""The pose estimator (spec section 7): synthetic segments with noise and outliers, renders of
-rooms and corridors through OpenCV's own camera, the sample views, images that cannot tell."""
+"""The pose estimator (docs/CONVENTIONS.md, "What the estimator reports"): synthetic
+segments with noise and outliers, renders of rooms and corridors through OpenCV's own camera,
+the sample views, images that cannot tell."""
 
 from __future__ import annotations
 

@@ -157,9 +157,9 @@ def test_the_pose_and_focal_length_are_estimated(rectified):
 
 
 def test_estimate_reports_the_more_frontal_plane_and_rectify_auto_the_facade(tmp_path):
-    """The two defaults differ on purpose (README): ``estimate`` follows spec section 7 (the
-    building's end, |pan| <= 45), ``rectify --auto`` the plane with the more horizontal edges
-    (the facade); each command's ``--wall`` gives the other's choice."""
+    """The two defaults differ on purpose (docs/COMMANDS.md): ``estimate`` reports the wall
+    most frontal (the building's end, |pan| <= 45), ``rectify --auto`` the plane with the
+    more horizontal edges (the facade); each command's ``--wall`` gives the other's choice."""
     def pan(*args: str) -> float:
         result = run_gsrwt("estimate", str(BUILDING), "-f", "csv", *args)
         assert result.returncode == 0, result.stderr

@@ -1,4 +1,4 @@
-"""Poses as other tools give them (spec section 6): pan/tilt/roll, OpenCV's rvec/tvec, quaternions.
+"""Poses as other tools give them (docs/POSES.md): pan/tilt/roll, OpenCV's rvec/tvec, quaternions.
 
 The references are independent of the module: OpenCV's own ``Rodrigues`` and ``projectPoints``,
 the camera built from words in ``conftest.camera_axes``, a Hamilton product written here, and

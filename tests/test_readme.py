@@ -1,4 +1,5 @@
-"""The README tells the truth: every command is documented, every command it shows runs."""
+"""The README and the pages of docs/ tell the truth: every command and option is documented,
+every command they show runs, every promise names its test."""
 
 from __future__ import annotations
 
@@ -10,6 +11,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import click
 import pytest
 from click.testing import CliRunner
 
@@ -18,22 +20,35 @@ from gsrwt_cli.cli import main
 
 ROOT = Path(__file__).resolve().parent.parent
 README = (ROOT / "README.md").read_text()
+DOCS = ROOT / "docs"
+#: The pages written by hand, README first: what documents the commands (docs/CLI.md, the
+#: commands' own --help, would document every option trivially, so it does not count).
+PAGES = {"README.md": README, **{f"docs/{page.name}": page.read_text()
+                                 for page in sorted(DOCS.glob("*.md")) if page.name != "CLI.md"}}
+DOCUMENTED = "\n".join(PAGES.values())
 
 
 def sh_blocks(text: str) -> list[list[str]]:
     return [block.strip().splitlines() for block in re.findall(r"```sh\n(.*?)```", text, re.S)]
 
 
-def readme_commands() -> list[str]:
-    """Every gsrwt command line in the README's sh blocks (the part after `pip ... &&`);
+def gsrwt_commands(text: str) -> list[str]:
+    """Every gsrwt command line in the sh blocks of ``text`` (the part after `pip ... &&`);
     the development commands are run by :func:`test_development_commands_run`."""
     commands = []
-    for block in sh_blocks(README):
+    for block in sh_blocks(text):
         for line in block:
             command = line.split(" && ", 1)[1] if line.startswith("pip ") else line
             if re.match(r"(gsrwt |find .*\| gsrwt )", command):
                 commands.append(command)
     return commands
+
+
+def readme_commands() -> list[str]:
+    """The gsrwt command lines of the README, then of the docs pages (by name), each once, in
+    the order a reader meets them: an example may use what an earlier one made."""
+    return list(dict.fromkeys(command for text in PAGES.values()
+                              for command in gsrwt_commands(text)))
 
 
 def test_quick_start_is_one_sh_block_of_two_lines():
@@ -48,11 +63,23 @@ def test_quick_start_is_one_sh_block_of_two_lines():
 
 @pytest.mark.parametrize("name", main.list_commands(None))
 def test_every_command_and_option_is_documented(name):
-    assert f"## `gsrwt {name}`" in README or f"`gsrwt {name}`" in README
-    for parameter in main.get_command(None, name).params:
-        for option in parameter.opts:
-            if option.startswith("--") and option != "--help":
-                assert option in README, f"gsrwt {name} {option} is not in the README"
+    """Each command has its section in docs/COMMANDS.md (``gsrwt tables`` as ``gsrwt tables
+    merge``), and each option of it and of its subcommands is in a page of the docs."""
+    commands = PAGES["docs/COMMANDS.md"]
+    assert re.search(rf"^## .*`gsrwt {name}[` ]", commands, re.M), name
+    command = main.get_command(None, name)
+    subcommands = [command.get_command(None, sub) for sub in command.list_commands(None)] if (
+        isinstance(command, click.Group)) else []
+    for each in (command, *subcommands):
+        for parameter in each.params:
+            for option in parameter.opts:
+                if option.startswith("--") and option != "--help":
+                    assert option in DOCUMENTED, f"gsrwt {name} {option} is in no page of the docs"
+
+
+@pytest.mark.parametrize("name", main.list_commands(None))
+def test_the_readme_shows_every_command_once_at_least(name):
+    assert any(command.startswith(f"gsrwt {name} ") for command in gsrwt_commands(README)), name
 
 
 @pytest.mark.parametrize("name", main.list_commands(None))
@@ -69,7 +96,8 @@ def test_version():
 
 @pytest.mark.slow
 def test_every_readme_command_runs(tmp_path):
-    """Run them all, in order, in a copy of the sample data, as a user would from the root."""
+    """Run them all (the README's, then the docs pages'), in order, in a copy of the sample
+    data, as a user would from the root."""
     shutil.copytree(ROOT / "sample_data", tmp_path / "sample_data")
     environment = {**os.environ, "PATH": f"{Path(sys.executable).parent}{os.pathsep}"
                    f"{os.environ.get('PATH', '')}"}
@@ -99,8 +127,9 @@ def test_every_readme_command_runs(tmp_path):
 
 @pytest.mark.slow
 def test_development_commands_run(tmp_path):
-    """The README's development block: benchmarks (small), sample regeneration, lint."""
-    (block,) = [b for b in sh_blocks(README) if any("make_samples" in line for line in b)]
+    """docs/DEVELOPMENT.md's block: benchmarks (small), sample regeneration, lint."""
+    (block,) = [b for b in sh_blocks(PAGES["docs/DEVELOPMENT.md"])
+                if any("make_samples" in line for line in b)]
     copy = tmp_path / "repo"
     shutil.copytree(ROOT, copy, ignore=shutil.ignore_patterns(".git", "rectified", ".venv",
                                                               "__pycache__", "*.egg-info"))
@@ -129,19 +158,30 @@ def test_development_commands_run(tmp_path):
 
 
 def test_python_api_example_runs(capsys, monkeypatch):
-    (block,) = re.findall(r"```python\n(.*?)```", README, re.S)
+    """docs/PYTHON_API.md's example, through the names ``gsrwt_cli`` exports."""
+    (block,) = re.findall(r"```python\n(.*?)```", PAGES["docs/PYTHON_API.md"], re.S)
     monkeypatch.chdir(ROOT)
-    exec(compile(block, "README.md", "exec"), {})
+    exec(compile(block, "docs/PYTHON_API.md", "exec"), {})
     printed = capsys.readouterr().out.splitlines()
     assert printed[0].startswith("(320, 240)")
+    assert "20 10 0" in printed and "plumb_bob" in printed
     delta, shift, gamma = (float(v) for v in printed[-1].split())
     assert (round(delta, 2), round(shift, 2), round(gamma, 2)) == (28.19, 427.46, -24.15)
 
 
+def test_the_readmes_python_example_runs(capsys, monkeypatch):
+    (block,) = re.findall(r"```python\n(.*?)```", README, re.S)
+    monkeypatch.chdir(ROOT)
+    exec(compile(block, "README.md", "exec"), {})
+    shape, delta = capsys.readouterr().out.rsplit(")", 1)
+    assert shape == "(240, 320, 3" and round(float(delta), 2) == 28.19
+
+
 def test_every_guarantee_names_tests_that_exist():
-    """Each row of the Guarantees table names tests (``file.py::name``, or ``::name`` for the
-    file named last) that are defined in that file, so the promise has a test behind it."""
-    section = README.split("## Guarantees", 1)[1].split("\n## ", 1)[0]
+    """Each row of the Guarantees table (docs/GUARANTEES.md) names tests (``file.py::name``, or
+    ``::name`` for the file named last) that are defined in that file, so the promise has a
+    test behind it."""
+    section = PAGES["docs/GUARANTEES.md"].split("# Guarantees", 1)[1].split("\n## ", 1)[0]
     rows = [line for line in section.splitlines() if line.startswith("| ") and "::" in line]
     assert len(rows) >= 10
     for row in rows:

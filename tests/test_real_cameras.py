@@ -1,5 +1,5 @@
 """Real cameras: roll, fx != fy, skew and lens distortion, checked against a camera built from
-OpenCV's own projection functions (not the project's) and from the words of the spec.
+OpenCV's own projection functions (not the project's) and from the words of docs/CONVENTIONS.md.
 
 The camera's axes come from :func:`conftest.camera_axes` (pan, tilt, then roll about the
 optical axis so that the top leans right); rays become pixels through ``cv2.projectPoints``
@@ -93,7 +93,7 @@ class OpenCVCamera:
         return cv2.remap(TEXTURE, map_x, map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT)
 
     def output_wall_points(self) -> np.ndarray:
-        """The wall point of every pixel of the default output frame (spec section 6)."""
+        """The wall point of every pixel of the default output frame (docs/CONVENTIONS.md)."""
         cx, cy = self.k[0, 2], self.k[1, 2]
         cols, rows = np.meshgrid(np.arange(WIDTH, dtype=float), np.arange(HEIGHT, dtype=float))
         unit = DISTANCE / self.focal

@@ -1,4 +1,4 @@
-"""Pan, tilt and roll from the image's own straight lines (spec section 7, thesis future work 1).
+"""Pan, tilt and roll from the image's own straight lines (thesis future work 1).
 
 >>> estimate = estimate_pose(image, Intrinsics(500, 500, width=640, height=480))  # doctest: +SKIP
 >>> estimate.pose.pan, estimate.confidence  # doctest: +SKIP
@@ -7,20 +7,20 @@ Steps (no I/O, nothing printed; arrays in, degrees out):
 
 1. straight segments by OpenCV's LSD (:func:`detect_segments`), their end points undistorted
    when the camera has a lens (never the image);
-2. each segment's interpretation plane ``n = r1 x r2`` through its end rays (spec section 7);
+2. each segment's interpretation plane ``n = r1 x r2`` through its end rays;
 3. the Manhattan frame (three orthogonal directions) by a minimal-sample search: two segments
    give a direction ``v1 = n1 x n2``, a third gives ``v2 = v1 x n3``, ``v3 = v1 x v2``; each
    hypothesis is scored by a truncated quadratic of the segments' end-point distances, then
    the best is refined by robust Gauss-Newton over its inliers (:func:`fit_manhattan_frame`);
 4. the vertical (the direction nearest the image's up), the wall (the horizontal nearest the
-   optical axis, so ``|pan| <= 45``) and the pose by spec section 6's decomposition.
+   optical axis, so ``|pan| <= 45``) and the pose by the decomposition of pan, tilt and roll.
 
 Unknown focal length: the clusters' vanishing points do not depend on it; two finite
-orthogonal ones ``p1, p2`` give ``f^2 = -(p1 - c).(p2 - c)`` (spec section 7), and the frame
+orthogonal ones ``p1, p2`` give ``f^2 = -(p1 - c).(p2 - c)``, and the frame
 is fitted again with that focal length.
 
-Frames: the thesis's camera frame (X up, Y right, Z forward; spec section 1); pixels
-``(col, row)`` with pixel centres at integers.
+Frames: the thesis's camera frame (X up, Y right, Z forward); pixels ``(col, row)`` with
+pixel centres at integers. docs/CONVENTIONS.md ("What the estimator reports") has it all in full.
 """
 
 from __future__ import annotations
@@ -154,8 +154,8 @@ def detect_segments(image: np.ndarray, min_length: float | None = None) -> np.nd
 def interpretation_planes(
     lines: np.ndarray, camera_from_pixel: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Unit normals ``(N, 3)`` of the segments' interpretation planes (spec section 7:
-    ``n = r1 x r2``) and their half lengths ``(N,)`` in pixels.
+    """Unit normals ``(N, 3)`` of the segments' interpretation planes
+    (``n = r1 x r2``) and their half lengths ``(N,)`` in pixels.
 
     ``camera_from_pixel``: homogeneous ideal pixel ``(col, row, 1)`` to a ray in the thesis's
     camera frame (X up, Y right, Z forward).
@@ -200,7 +200,7 @@ def fit_manhattan_frame(
     normals: np.ndarray, half_lengths: np.ndarray, inlier_px: float = INLIER_PX,
     hypotheses: int = HYPOTHESES, seed: int = 0,
 ) -> Frame:
-    """The three orthogonal directions that most segments meet in (spec section 7).
+    """The three orthogonal directions that most segments meet in (a Manhattan frame).
 
     Convention
     ----------
@@ -392,7 +392,7 @@ def cluster_vanishing_point(lines: np.ndarray, centre: np.ndarray, scale: float)
 def focal_from_vanishing_points(
     points: list[np.ndarray], centre: np.ndarray, diagonal: float
 ) -> float | None:
-    """``f = sqrt(-(p1 - c).(p2 - c))`` (spec section 7) from the best-conditioned pair of
+    """``f = sqrt(-(p1 - c).(p2 - c))`` from the best-conditioned pair of
     finite vanishing points (homogeneous pixels) of orthogonal directions; None if none gives
     a focal length within :data:`FOCAL_RANGE` diagonals."""
     finite = []
@@ -423,7 +423,7 @@ def world_from_camera_of(
     """The rotation (rows: up, wall-right, into-wall in the camera frame) of a Manhattan frame.
 
     The vertical is the direction nearest the camera's up axis (X), turned to point up. The
-    wall (spec section 7, ``wall="frontal"``) is the vertical plane most frontal to the
+    wall (``wall="frontal"``, the default) is the vertical plane most frontal to the
     camera: its normal is the horizontal direction nearest the optical axis (Z), turned into
     the wall, so ``|pan| <= 45``; wall-right is ``into x up``. ``wall="dominant"``: the
     vertical plane with the more horizontal edges instead (``support``: the segments' length
@@ -490,9 +490,9 @@ def estimate_pose(
     ``image``: decoded pixels (grey or BGR[A], any depth), ``(H, W[, C])``. ``camera``: its
     intrinsics (size, if given, must match; lens distortion is removed from the segments' end
     points), or None when the focal length is unknown: it is then estimated from two finite
-    orthogonal vanishing points (spec section 7), with the principal point
+    orthogonal vanishing points, with the principal point
     ``principal_point`` or the image's centre. ``lines``: segments ``(N, 4)`` to use instead
-    of detecting them (tests). ``wall``: ``frontal`` (spec section 7) or ``dominant``
+    of detecting them (tests). ``wall``: ``frontal`` (``|pan| <= 45``) or ``dominant``
     (:func:`world_from_camera_of`). Never raises for an image that cannot tell its pose: the
     result's ``error`` says why (``only 1 of 3 directions found, 14 segments``).
     """
@@ -535,7 +535,7 @@ def estimate_pose(
 
 def _focal_of(ideal: np.ndarray, centre: np.ndarray, diagonal: float, side: float,
               inlier_px: float) -> float | None:
-    """The focal length of an image whose camera is unknown (spec section 7).
+    """The focal length of an image whose camera is unknown.
 
     The frame is searched at :data:`FOCAL_GRID` focal lengths (multiples of the long side);
     at the best, the clusters' vanishing points must include two finite orthogonal ones

@@ -53,7 +53,7 @@ def draw_estimate(image: np.ndarray, estimate: PoseEstimate,
 
 def _draw_horizon(picture: np.ndarray, estimate: PoseEstimate, camera: Intrinsics,
                   thickness: int) -> None:
-    """The line of ideal pixels whose rays are horizontal: ``(K^-1)^T up`` (spec section 7)."""
+    """The line of ideal pixels whose rays are horizontal: ``(K^-1)^T up``."""
     assert estimate.world_from_camera is not None
     focal = camera.focal
     camera_from_pixel = np.diag([1 / focal, 1 / focal, 1.0]) @ camera.image_from_pixel()

@@ -33,7 +33,7 @@ from .executor import ProcessExecutor
 from .in_order import run_in_order
 from .job_errors import error_text
 
-#: Columns of ``gsrwt estimate`` (a public contract, documented in the README).
+#: Columns of ``gsrwt estimate`` (a public contract, documented in docs/COMMANDS.md).
 ESTIMATE_COLUMNS = (
     "image", "pan", "tilt", "roll", "focal", "fx", "fy", "cx", "cy", "width", "height",
     "confidence", "segments", "inliers", "focal_source",
@@ -47,7 +47,7 @@ _POSE_VALUES = ("pan", "tilt", "roll", *GSRWT_FIELDS, *POSE_FIELDS)
 @dataclass(frozen=True)
 class EstimateOptions:
     """How poses are estimated: results below ``min_confidence`` are errors; ``wall`` is
-    ``frontal`` (spec section 7) or ``dominant`` (:func:`~gsrwt_cli.api.estimate.
+    ``frontal`` (``|pan| <= 45``) or ``dominant`` (:func:`~gsrwt_cli.api.estimate.
     world_from_camera_of`)."""
 
     min_confidence: float = 0.0

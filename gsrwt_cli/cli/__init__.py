@@ -71,13 +71,13 @@ def internal_error_message(error: BaseException) -> str:
 #: ``gsrwt --version``, ``gsrwt --help`` and the light commands start fast.
 COMMANDS: dict[str, tuple[str, str]] = {
     "estimate": ("estimate", "Estimate pan, tilt and roll of each image from its straight lines "
-                             "(spec section 7)."),
+                             "(thesis future work 1)."),
     "gaze": ("gaze", "Pan and tilt that centre a target seen on the canonical view, or, with "
                      "no target, the wall point the camera looks at."),
     "lines": ("landmarks", "Straight segments (door boundaries) by the Hough transform on frontal "
-                           "views (Sec. 5.4)."),
+                           "views (Sec. 5.2.2)."),
     "match": ("landmarks", "Find objects (door knob, peek window) with the Generalized Hough "
-                           "Transform (Sec. 5.4)."),
+                           "Transform (Sec. 5.2.2)."),
     "params": ("params", "Print the GS-RWT parameters (theta, delta, a, gamma, vanishing point "
                          "and line)."),
     "rectify": ("rectify", "Rectify images into canonical frontal views of the wall they show "

@@ -90,7 +90,7 @@ camera_options = field_options(
 def estimate(inputs: tuple[str, ...], output: str | None, fmt: str | None, recursive: bool,
              sidecar: Path | None, min_confidence: float, wall: str, draw: Path | None,
              max_input_pixels: str, jobs: int | None, quiet: bool, **camera: Any) -> None:
-    """Estimate pan, tilt and roll of each image from its straight lines (spec section 7).
+    """Estimate pan, tilt and roll of each image from its straight lines (thesis future work 1).
 
     Writes one sidecar row per image: image, pan, tilt, roll, focal, cx, cy, width,
     height (what 'gsrwt rectify --sidecar' reads), then confidence, segments, inliers,

@@ -72,7 +72,8 @@ def _check_range(name: str, value: float, low: float, high: float, unit: str) ->
         raise ViewError(name, f"{name} must be below {high:g}{unit}, got {value:.15g}")
 
 
-#: Lens models (spec section 6) and the coefficients each takes, in OpenCV's order.
+#: Lens models (docs/CONVENTIONS.md, "Lens distortion") and the coefficients each takes, in
+#: OpenCV's order.
 LENS_MODELS = {
     "plumb_bob": ("k1", "k2", "p1", "p2", "k3"),
     "rational_polynomial": ("k1", "k2", "p1", "p2", "k3", "k4", "k5", "k6",
@@ -87,7 +88,7 @@ LENS_FIELDS = LENS_MODELS["rational_polynomial"]
 
 @dataclass(frozen=True)
 class Lens:
-    """A lens distortion model as OpenCV applies it (spec section 6).
+    """A lens distortion model as OpenCV applies it (docs/CONVENTIONS.md).
 
     ``model``: ``plumb_bob`` (k1, k2, p1, p2, k3), ``rational_polynomial`` (k1..k6, p1, p2,
     thin prism s1..s4, tilt tau_x, tau_y) or ``equidistant`` (the fisheye model of
@@ -146,7 +147,7 @@ class Lens:
 class Intrinsics:
     """How a camera maps rays to pixels: ``K = [[fx, skew, cx], [0, fy, cy], [0, 0, 1]]``.
 
-    OpenCV's pixel convention (spec section 6): ``(col, row)``, row down, pixel centres at
+    OpenCV's pixel convention: ``(col, row)``, row down, pixel centres at
     integers; camera ``x`` right, ``y`` down. ``cx, cy`` default to the image centre
     ``((width-1)/2, (height-1)/2)`` when the size is known. ``lens``: a :class:`Lens`, or
     ``None`` for a pinhole. Values are checked as
@@ -197,7 +198,7 @@ class Intrinsics:
 
     @property
     def focal(self) -> float:
-        """The focal length of the thesis's image frame, ``f = sqrt(fx fy)`` (spec section 6)."""
+        """The focal length of the thesis's image frame, ``f = sqrt(fx fy)``."""
         return self.fx if self.fx == self.fy else math.sqrt(self.fx * self.fy)
 
     @property
@@ -264,8 +265,8 @@ class Intrinsics:
 class Pose:
     """Where a camera looks, relative to the wall: ``pan``, ``tilt``, ``roll`` in degrees.
 
-    ``pan > 0`` turns left, ``tilt > 0`` tilts up (spec section 1), both strictly between -90
-    and 90. ``roll`` turns the camera about its optical axis after them (spec section 6):
+    ``pan > 0`` turns left, ``tilt > 0`` tilts up (Sec. 3.2), both strictly between -90
+    and 90. ``roll`` turns the camera about its optical axis after them (docs/CONVENTIONS.md):
     ``world_from_camera = Rx(pan) Ry(tilt) Rz(roll)``; ``roll > 0`` leans the camera's top to
     the right (seen from behind it), so the scene appears turned counter-clockwise.
     """
@@ -324,7 +325,7 @@ class View:
 
     Convention
     ----------
-    - ``pan``, ``tilt``: degrees, ``pan > 0`` turns left, ``tilt > 0`` tilts up (spec section 1);
+    - ``pan``, ``tilt``: degrees, ``pan > 0`` turns left, ``tilt > 0`` tilts up (Sec. 3.2);
       strictly between -90 and 90, and the horizon at least :data:`MIN_HORIZON_OFFSET_PX`
       from the principal point.
     - ``focal``: focal length in pixels, ``0 < focal <`` :data:`MAX_FOCAL_PX`.
@@ -434,8 +435,8 @@ class View:
 
     def image_from_pixel(self) -> Matrix:
         """Pixel ``(col, row, 1)`` to the image frame of the camera at this pan and tilt
-        *without* roll (:meth:`Intrinsics.image_from_pixel`, then the roll undone: spec
-        section 6, the GS-RWT of a rolled view is the thesis's applied after turning the
+        *without* roll (:meth:`Intrinsics.image_from_pixel`, then the roll undone:
+        the GS-RWT of a rolled view is the thesis's applied after turning the
         image frame by the roll). Ideal (undistorted) pixels when the camera has a lens."""
         if self.pose.roll == 0:
             return self.intrinsics.image_from_pixel()

@@ -1,4 +1,5 @@
-"""The output frame: where the canonical view lands in output pixels (spec section 5).
+"""The output frame: where the canonical view lands in output pixels (Sec. 5.1,
+Fig. 5.7; docs/CONVENTIONS.md, "The output image").
 
 Composes the GS-RWT (in the image frame) with the pixel frames of the input and the output
 into one 3x3 homography, output pixel from input pixel, that an OpenCV warp applies in one pass.
@@ -20,7 +21,7 @@ from .pixelmap import LensDistortion, PixelMap
 def canonical_from_pixel(view: View) -> Matrix:
     """Input pixel ``(col, row)`` to canonical coordinates ``(U, V)`` at frontal resolution.
 
-    ``(U, V) = (f / sin theta) * GS-RWT(x, y)`` (Eq. 4.22 scaled as in spec section 5): the
+    ``(U, V) = (f / sin theta) * GS-RWT(x, y)`` (Eq. 4.22 scaled by ``f / sin theta``): the
     wall seen frontally, turned by 180 degrees (the negative scale of Eq. 4.25) and shifted.
     """
     return view.parameters.canonical_from_image() @ view.image_from_pixel()
@@ -37,7 +38,7 @@ def upright_from_canonical(
     """Canonical ``(U, V)`` to upright output pixels ``(col, row)``.
 
     The canonical view is turned by 180 degrees, so output columns run along ``-V`` and rows
-    along ``+U`` (spec section 3). ``scale`` output pixels per frontal pixel. The optical-axis
+    along ``+U`` (Eq. 4.25). ``scale`` output pixels per frontal pixel. The optical-axis
     point lands on ``anchor`` (default: the input's principal point, so that pan = tilt = 0
     is the identity), as in the thesis's bounding box of Fig. 5.7.
     """

@@ -72,8 +72,8 @@ def wall_point_of_canonical_pixel(view: View, col: float, row: float) -> tuple[f
     pixel of the default canonical view (what ``gsrwt rectify`` writes unless told otherwise).
 
     That view shows the fixation point at the principal point, one pixel per ``Zc/f`` wall
-    units, upright (Eq. 4.25 and spec section 5): a vector measured on it, times ``Zc/f``, is
-    a vector on the wall (the gaze control of Sec. 5.2.2).
+    units, upright (Eq. 4.25 scaled by ``f / sin theta``): a vector measured on it, times
+    ``Zc/f``, is a vector on the wall (the gaze control of Sec. 5.2.2).
     """
     distance = view.distance or 1.0
     fix_x, fix_y = fixation_point(view.pan, view.tilt, distance)

@@ -2,7 +2,7 @@
 
 Pure mathematics: arrays in, arrays out, no I/O. Angles are degrees at every public edge.
 
-Convention (thesis Sec. 3.2, spec section 1)
+Convention (thesis Sec. 3.2; docs/CONVENTIONS.md)
 --------------------------------------------
 - Image frame: ``x`` up, ``y`` right, origin at the principal point, pixels.
   Points are ``(N, 2)`` arrays of ``(x, y)``; homogeneous vectors are ``(x, y, 1)``.
@@ -144,8 +144,8 @@ def homogeneous_w(dst_from_src: ArrayLike, points: ArrayLike) -> NDArray[np.floa
 def hough_matrix(dst_from_src: ArrayLike) -> Matrix:
     """Slope-intercept (Hough space) mapping of lines for ``[u, v, 1] ~ r @ [x, y, 1]``.
 
-    Eq. 4.6 as corrected in the spec: a line ``v = m_uv u + c_uv`` of the destination is the
-    line ``y = m_xy x + c_xy`` of the source with
+    Eq. 4.6 with the sign of ``r21`` corrected (the thesis prints ``+r21``): a line
+    ``v = m_uv u + c_uv`` of the destination is the line ``y = m_xy x + c_xy`` of the source with
     ``[m_xy, c_xy, 1] ~ [[r11, r31, -r21], [r13, r33, -r23], [-r12, -r32, r22]] @ [m_uv, c_uv, 1]``.
     (The thesis prints ``+r21``, which mapped points disprove.)
     """
@@ -392,7 +392,7 @@ class GsrwtParameters:
     def canonical_from_image(self) -> Matrix:
         """The GS-RWT scaled by ``f / sin theta``: canonical coordinates at frontal resolution.
 
-        Spec section 5: ``(U, V) = (f / sin theta) (u/w, v/w)``, so that one unit is ``Zc/f``
+        At frontal resolution: ``(U, V) = (f / sin theta) (u/w, v/w)``, so that one unit is ``Zc/f``
         wall units, what a camera at the same place facing the wall squarely would see with the
         same focal length (up to the 180-degree turn and the shift of Eq. 4.25).
         """

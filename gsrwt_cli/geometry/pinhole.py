@@ -24,7 +24,7 @@ from .bounds import (
     MIN_HORIZON_OFFSET_PX,
 )
 
-#: Columns of ``gsrwt params`` (a public contract, documented in the README).
+#: Columns of ``gsrwt params`` (a public contract, documented in docs/TABLES.md).
 PARAMS_COLUMNS = (
     "image",
     "pan_deg",

@@ -3,11 +3,11 @@
 
 Pure numpy: arrays and numbers in, arrays and numbers out, no I/O, no OpenCV. Angles are
 degrees at every public edge (pan, tilt, roll); a Rodrigues vector's length is radians, as
-OpenCV's. The frames are the spec's (``../shared/spec/GSRWT.md`` sections 1 and 6); see
+OpenCV's. The frames are those of ``docs/CONVENTIONS.md``; see
 ``docs/POSES.md`` for a picture.
 
-Frames (spec sections 1 and 6)
-------------------------------
+Frames
+------
 - **Thesis camera**: X up, Y right, Z forward (the optical axis).
 - **Thesis world** (the wall's frame): X up, Y right, Z into the wall; the camera sits at the
   origin and the wall is the plane ``Z = Zc``.
@@ -31,11 +31,11 @@ third column of ``Rx(pan) Ry(tilt)``: ``(sin tilt, -sin pan cos tilt, cos pan co
 The optical axis meets the wall in front of the camera exactly when that axis points into the
 wall, ``world_from_camera[2, 2] = cos(pan) cos(tilt) > 0``. The same entry is ``R[2, 2]`` in
 OpenCV's frames (``C`` leaves the z axes alone), the forward component of the wall's z axis.
-It is also exactly the condition under which the decomposition (spec section 6) lands in the
-pose's domain: ``W[2, 2] > 0`` makes ``|W[0, 2]| < 1`` (a unit column), so ``|tilt| < 90``, and
-then ``cos(pan) = W[2, 2] / cos(tilt) > 0``, so ``|pan| < 90``; conversely every pan and tilt
-strictly between -90 and 90 gives ``cos(pan) cos(tilt) > 0``. ``W[2, 2] <= 0`` (the wall
-behind the camera, or edge-on at 0) is a :class:`PoseError`.
+It is also exactly the condition under which the decomposition (:func:`pose_from_rotation`)
+lands in the pose's domain: ``W[2, 2] > 0`` makes ``|W[0, 2]| < 1`` (a unit column), so
+``|tilt| < 90``, and then ``cos(pan) = W[2, 2] / cos(tilt) > 0``, so ``|pan| < 90``;
+conversely every pan and tilt strictly between -90 and 90 gives ``cos(pan) cos(tilt) > 0``.
+``W[2, 2] <= 0`` (the wall behind the camera, or edge-on at 0) is a :class:`PoseError`.
 
 Over 400 lines: three representations of a rotation, each converted both ways, with the
 checks that keep them honest.
@@ -54,7 +54,7 @@ from ..base.messages import quote
 Matrix = NDArray[np.float64]
 Vector = NDArray[np.float64]
 
-#: OpenCV frame -> thesis frame, for camera and wall alike: ``X = -y, Y = x, Z = z`` (spec 6).
+#: OpenCV frame -> thesis frame, for camera and wall alike: ``X = -y, Y = x, Z = z``.
 THESIS_FROM_OPENCV: Matrix = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
 THESIS_FROM_OPENCV.setflags(write=False)
 
@@ -75,7 +75,7 @@ class PoseError(ValueError):
 
 
 class PoseAngles(NamedTuple):
-    """A pose in degrees (spec section 6): ``pan``, ``tilt`` strictly within (-90, 90),
+    """A pose in degrees: ``pan``, ``tilt`` strictly within (-90, 90),
     ``roll`` within [-180, 180]."""
 
     pan: float
@@ -139,7 +139,7 @@ def _plain(value: float) -> float:
 
 
 # --------------------------------------------------------------------------------------------
-# Pan, tilt, roll <-> world_from_camera (spec section 6)
+# Pan, tilt, roll <-> world_from_camera
 # --------------------------------------------------------------------------------------------
 
 
@@ -159,7 +159,7 @@ def _rz(angle_rad: float) -> Matrix:
 
 
 def rotation_from_pose(pan: float, tilt: float, roll: float = 0.0) -> Matrix:
-    """``world_from_camera = Rx(pan) @ Ry(tilt) @ Rz(roll)`` in the thesis frames (spec 6).
+    """``world_from_camera = Rx(pan) @ Ry(tilt) @ Rz(roll)`` in the thesis frames.
 
     Degrees in. Columns: the camera's up, right and forward axes in the world (X up, Y right,
     Z into the wall). At ``roll = 0`` it is exactly the transpose of
@@ -173,7 +173,7 @@ def rotation_from_pose(pan: float, tilt: float, roll: float = 0.0) -> Matrix:
 
 
 def pose_from_rotation(world_from_camera: ArrayLike) -> PoseAngles:
-    """Pan, tilt and roll in degrees of a ``world_from_camera`` rotation (spec section 6).
+    """Pan, tilt and roll in degrees of a ``world_from_camera`` rotation.
 
     ``tilt = asin(W[0,2])``, ``pan = atan2(-W[1,2], W[2,2])``, and ``roll`` from
     ``(Rx(pan) Ry(tilt))^T W = Rz(roll)``: ``roll = atan2(M[1,0], M[0,0])``. Unique whenever
@@ -205,7 +205,7 @@ def pose_from_rotation(world_from_camera: ArrayLike) -> PoseAngles:
 
 
 # --------------------------------------------------------------------------------------------
-# OpenCV frames <-> thesis frames (spec section 6)
+# OpenCV frames <-> thesis frames
 # --------------------------------------------------------------------------------------------
 
 
@@ -376,7 +376,7 @@ def pose_from_rvec(rvec: ArrayLike) -> PoseAngles:
     frames (wall x right, y down, z into the wall; camera x right, y down, z forward).
 
     ``R = rotation_from_rvec(rvec)``, ``world_from_camera = C R^T C^T``, then
-    :func:`pose_from_rotation` (spec section 6). Raises :class:`PoseError` for a non-finite
+    :func:`pose_from_rotation`. Raises :class:`PoseError` for a non-finite
     vector or when the wall is behind the camera (``R[2,2] <= 0``).
 
     Hand-worked: a camera facing the wall squarely has ``R = I``, ``rvec = 0`` and pan = tilt

@@ -1,6 +1,6 @@
 """Camera calibration files: OpenCV ``FileStorage`` YAML/XML and ROS ``camera_info`` YAML.
 
-:func:`load_camera` reads the intrinsics a calibration tool wrote (spec section 6) into an
+:func:`load_camera` reads the intrinsics a calibration tool wrote into an
 :class:`~gsrwt_cli.geometry.camera.Intrinsics` with its :class:`~gsrwt_cli.geometry.camera.Lens`;
 :func:`write_opencv_yaml`, :func:`write_opencv_xml` and :func:`write_ros_yaml` write them
 back as those tools do.
