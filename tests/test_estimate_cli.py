@@ -165,3 +165,14 @@ def test_a_stopped_run_still_gives_every_image_its_row(tmp_path):
     assert statuses[0] == "ok" and statuses[-1] == "interrupted"
     assert set(statuses) <= {"ok", "interrupted"}
     assert "interrupted:" in errors and "Traceback" not in errors
+
+
+def test_the_tables_name_the_estimators_vanishing_points_in_its_order():
+    """``tables.columns`` (numpy-free, for start-up) spells the estimator's directions
+    itself; they must be the estimator's, in its order."""
+    from gsrwt_cli.api.estimate import DIRECTION_NAMES
+    from gsrwt_cli.tables.columns import ESTIMATE_COLUMNS, VANISHING_DIRECTIONS
+
+    assert VANISHING_DIRECTIONS == DIRECTION_NAMES
+    assert [name for name in ESTIMATE_COLUMNS if name.startswith("vp_")] == [
+        f"vp_{name}_{axis}" for name in DIRECTION_NAMES for axis in ("col", "row")]

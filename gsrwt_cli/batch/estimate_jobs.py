@@ -29,17 +29,11 @@ from ..imaging.images import (
 from ..inputs.focal import with_focal
 from ..inputs.records import GSRWT_FIELDS, POSE_FIELDS, SENSOR_FIELDS, view_from_values
 from ..io.outputs import write_atomic
+from ..tables.columns import ESTIMATE_COLUMNS  # noqa: F401  (named here too)
 from .executor import ProcessExecutor
 from .in_order import run_in_order
 from .job_errors import error_text
 
-#: Columns of ``gsrwt estimate`` (a public contract, documented in docs/COMMANDS.md).
-ESTIMATE_COLUMNS = (
-    "image", "pan", "tilt", "roll", "focal", "fx", "fy", "cx", "cy", "width", "height",
-    "confidence", "segments", "inliers", "focal_source",
-    *(f"vp_{name}_{axis}" for name in DIRECTION_NAMES for axis in ("col", "row")),
-    "status", "error",
-)
 #: Fields of a record that give a pose: an estimate ignores them (it makes its own).
 _POSE_VALUES = ("pan", "tilt", "roll", *GSRWT_FIELDS, *POSE_FIELDS)
 

@@ -41,28 +41,13 @@ from ..inputs.sidecar import Sidecar
 from ..inputs.sources import Source
 from ..io.outputs import OutsideOutputError, check_inside, remove_stale_temporaries, write_atomic
 from ..io.storage import Location, fetched, is_url, open_input
-from ..tables.rows import PARAMS_COLUMNS, params_row
+from ..tables.columns import RECTIFY_COLUMNS  # noqa: F401  (named here too)
+from ..tables.rows import params_row, plan_row
 from .executor import Executor, ProcessExecutor
 from .in_order import run_in_order
 from .job_errors import JobError, error_text
 from .reruns import differences, is_regular_file, made_with, record_of
 from .settings import Describe, Settings  # noqa: F401  (named here too)
-
-RECTIFY_COLUMNS = (
-    *PARAMS_COLUMNS,
-    "focal_source",
-    "pose_source",
-    "confidence",
-    "output",
-    "out_width",
-    "out_height",
-    "scale",
-    "homography",
-    "made_with",
-    "status",
-    "error",
-)
-
 
 # --------------------------------------------------------------------------------------------
 # Jobs: one per image, with its parameters found in the main process
@@ -175,11 +160,7 @@ def _view(job: Job, estimate: bool = True) -> tuple[View, str, dict[str, Any]]:
 
 
 def _geometry(info: Plan) -> dict[str, Any]:
-    return {
-        **params_row(info.view, None),
-        **info.pixel_map.table_columns(),
-        "scale": info.frame.scale,
-    }
+    return plan_row(info)
 
 
 def _made_with(job: Job, settings: Settings) -> str | None:

@@ -25,9 +25,9 @@ from typing import TYPE_CHECKING, Any
 from urllib.parse import quote as percent_encoded
 
 from ..base.messages import shorten
-from ..geometry.pinhole import PARAMS_COLUMNS
 from ..imaging.images import image_file_size
 from ..inputs.records import SIDECAR_FIELDS, load_camera_file
+from ..tables.columns import PARAMS_COLUMNS
 
 if TYPE_CHECKING:
     from ..geometry.camera import Lens

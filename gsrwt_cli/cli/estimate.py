@@ -12,13 +12,14 @@ from tqdm import tqdm
 
 from ..api.estimate import WALL_CHOICES
 from ..base.messages import one_line
-from ..batch.estimate_jobs import ESTIMATE_COLUMNS, EstimateJob, EstimateOptions, run_estimates
+from ..batch.estimate_jobs import EstimateJob, EstimateOptions, run_estimates
 from ..batch.rectify_jobs import worker_context
 from ..inputs.calibration import CalibrationError
 from ..inputs.records import load_camera_file
 from ..inputs.sidecar import SidecarError, display_path
 from ..io.storage import location
 from ..io.targets import Drawings
+from ..tables.columns import ESTIMATE_COLUMNS
 from ..tables.writer import FORMATS, TableWriter, format_from_extension
 from .options import (
     VIEW_OPTIONS,

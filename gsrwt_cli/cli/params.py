@@ -47,7 +47,8 @@ def params(sidecar: Path | None, fmt: str | None, **kwargs: Any) -> None:
     defaults = view_defaults(kwargs)
     fmt = resolve_format(fmt)
     if sidecar is None:
-        from ..geometry.pinhole import PARAMS_COLUMNS, pinhole_numbers, pinhole_params_row
+        from ..geometry.pinhole import pinhole_numbers, pinhole_params_row
+        from ..tables.columns import PARAMS_COLUMNS
 
         numbers = pinhole_numbers(defaults, "options")  # a plain pinhole: no numpy to load
         row = None if numbers is None else pinhole_params_row(numbers)

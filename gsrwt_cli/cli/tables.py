@@ -34,8 +34,7 @@ MACHINE_FORMATS = ("csv", "tsv", "json", "jsonl")
 
 def rectify_table() -> TableSchema:
     """The table ``gsrwt rectify`` writes, each of its columns with what its cells hold."""
-    from ..batch.rectify_jobs import RECTIFY_COLUMNS  # with OpenCV: only when a table is merged
-    from ..geometry.pinhole import PARAMS_COLUMNS
+    from ..tables.columns import PARAMS_COLUMNS, RECTIFY_COLUMNS
 
     kinds = {name: NUMBER for name in (*PARAMS_COLUMNS, "confidence", "scale")}
     kinds.update(image=NAME, horizon_in_image=FLAG, out_width=POSITIVE_WHOLE,

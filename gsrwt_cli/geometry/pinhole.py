@@ -24,30 +24,6 @@ from .bounds import (
     MIN_HORIZON_OFFSET_PX,
 )
 
-#: Columns of ``gsrwt params`` (a public contract, documented in docs/TABLES.md).
-PARAMS_COLUMNS = (
-    "image",
-    "pan_deg",
-    "tilt_deg",
-    "focal_px",
-    "roll_deg",
-    "fx_px",
-    "fy_px",
-    "theta_deg",
-    "delta_deg",
-    "a_px",
-    "gamma_deg",
-    "vp_x",
-    "vp_y",
-    "vp_col",
-    "vp_row",
-    "vl_a",
-    "vl_b",
-    "vl_c",
-    "foreshortening",
-    "horizon_in_image",
-)
-
 #: The fields of a record of a square-pixel pinhole with no roll, the common case that
 #: :func:`pinhole_numbers` reads (for tables of many views computed together, and for one
 #: view given by options).

@@ -614,15 +614,6 @@ class PixelMap:
         return cv2.remap(pixels, map_x, map_y, interpolation, dst=out, borderMode=border,
                          borderValue=fill)
 
-    def table_columns(self) -> dict[str, object]:
-        """The rectify table's geometry columns: ``out_width``, ``out_height``, ``homography``
-        (9 numbers row-major, scaled so that ``w = 1`` at the principal point)."""
-        return {
-            "out_width": self.size[0],
-            "out_height": self.size[1],
-            "homography": " ".join(f"{value:.12g}" for value in self.output_from_input.ravel()),
-        }
-
 
 #: Output pixels spanning more input pixels than this are filtered (``antialias``).
 ANTIALIAS_SHRINK = 1.5

@@ -21,7 +21,6 @@ from ..geometry.camera import (
     View,
 )
 from ..geometry.gsrwt import parameter_arrays
-from ..geometry.pinhole import PARAMS_COLUMNS  # noqa: F401  (named here too)
 from ..inputs.records import (
     GSRWT_FIELDS,
     SIMPLE_PINHOLE_FIELDS,
@@ -29,8 +28,16 @@ from ..inputs.records import (
     simple_pinhole_numbers,
     view_from_values,
 )
+from .columns import (  # noqa: F401  (named here too)
+    GAZE_COLUMNS,
+    LINES_COLUMNS,
+    MATCH_COLUMNS,
+    PARAMS_COLUMNS,
+    TRACK_COLUMNS,
+)
 
 if TYPE_CHECKING:
+    from ..geometry.framing import Plan
     from ..vision.landmarks import Line, Match
 
 #: Maps ``(N, 2)`` frontal-view pixels to the original image's, or gives None (no map).
@@ -88,6 +95,21 @@ class ParamsBlock:
 
     columns: dict[str, list[Any]]
     count: int
+
+
+def plan_row(plan: Plan) -> dict[str, Any]:
+    """The geometry columns of a ``gsrwt rectify`` row: the view's :func:`params_row`, the
+    output's size (``out_width``, ``out_height``), its ``scale`` (output pixels per frontal
+    pixel) and the ``homography`` (9 numbers row-major, output pixel <- input pixel, scaled
+    so that ``w = 1`` at the principal point; 12 significant digits)."""
+    homography = np.asarray(plan.pixel_map.output_from_input, dtype=np.float64)
+    return {
+        **params_row(plan.view, None),
+        "out_width": plan.size[0],
+        "out_height": plan.size[1],
+        "scale": plan.frame.scale,
+        "homography": " ".join(f"{value:.12g}" for value in homography.ravel()),
+    }
 
 
 def params_rows(
@@ -265,16 +287,6 @@ def _simple_pinhole_rows(table: np.ndarray) -> list[dict[str, Any] | None]:
         row["roll_deg"] = 0.0
         rows.append(row)
     return rows
-
-
-#: Columns of ``gsrwt gaze`` and ``gsrwt track``.
-GAZE_COLUMNS = ("pan_deg", "tilt_deg", "wall_x", "wall_y")
-TRACK_COLUMNS = ("position", "pan_deg", "tilt_deg", "theta_deg", "foreshortening")
-
-#: Columns of ``gsrwt lines`` and ``gsrwt match``.
-LINES_COLUMNS = ("image", "rho", "theta_deg", "votes", "x1", "y1", "x2", "y2",
-                 "x1_src", "y1_src", "x2_src", "y2_src", "length", "contrast")
-MATCH_COLUMNS = ("image", "template", "x", "y", "scale", "votes", "score", "x_src", "y_src")
 
 
 def line_row(image: Path, line: Line, to_source: ToSource) -> dict[str, Any]:

@@ -1,0 +1,42 @@
+"""The columns of every public table, in one place: a contract, documented in docs/TABLES.md
+and docs/COMMANDS.md, and kept by golden tables (``tests/test_golden_tables.py``).
+
+Plain tuples, no numpy: ``gsrwt params`` with options starts without it.
+"""
+
+from __future__ import annotations
+
+#: ``gsrwt params``: the GS-RWT parameters of a view (thesis Sec. 4.5, Tables 5.1 and 5.2).
+PARAMS_COLUMNS = (
+    "image", "pan_deg", "tilt_deg", "focal_px", "roll_deg", "fx_px", "fy_px", "theta_deg",
+    "delta_deg", "a_px", "gamma_deg", "vp_x", "vp_y", "vp_col", "vp_row", "vl_a", "vl_b",
+    "vl_c", "foreshortening", "horizon_in_image",
+)
+
+#: ``gsrwt rectify``: the view's parameters, where they came from, the output and its
+#: geometry, what made it, and how it went.
+RECTIFY_COLUMNS = (
+    *PARAMS_COLUMNS, "focal_source", "pose_source", "confidence", "output", "out_width",
+    "out_height", "scale", "homography", "made_with", "status", "error",
+)
+
+#: The vanishing points ``gsrwt estimate`` reports, in the estimator's order (its
+#: ``DIRECTION_NAMES``).
+VANISHING_DIRECTIONS = ("vertical", "wall", "normal")
+
+#: ``gsrwt estimate``: a sidecar row of the estimated camera, and the evidence.
+ESTIMATE_COLUMNS = (
+    "image", "pan", "tilt", "roll", "focal", "fx", "fy", "cx", "cy", "width", "height",
+    "confidence", "segments", "inliers", "focal_source",
+    *(f"vp_{name}_{axis}" for name in VANISHING_DIRECTIONS for axis in ("col", "row")),
+    "status", "error",
+)
+
+#: ``gsrwt gaze`` and ``gsrwt track`` (thesis Sec. 5.2.2-5.2.3).
+GAZE_COLUMNS = ("pan_deg", "tilt_deg", "wall_x", "wall_y")
+TRACK_COLUMNS = ("position", "pan_deg", "tilt_deg", "theta_deg", "foreshortening")
+
+#: ``gsrwt lines`` and ``gsrwt match`` (thesis Sec. 5.2.2).
+LINES_COLUMNS = ("image", "rho", "theta_deg", "votes", "x1", "y1", "x2", "y2",
+                 "x1_src", "y1_src", "x2_src", "y2_src", "length", "contrast")
+MATCH_COLUMNS = ("image", "template", "x", "y", "scale", "votes", "score", "x_src", "y_src")
