@@ -184,7 +184,7 @@ def _rodrigues(omega: np.ndarray) -> np.ndarray:
 
 
 @dataclass(frozen=True)
-class Frame:
+class ManhattanFrame:
     """Three orthonormal directions (the columns of ``directions``, camera frame) and the
     segments that meet in each (``labels``: 0, 1, 2, or -1)."""
 
@@ -199,7 +199,7 @@ class Frame:
 def fit_manhattan_frame(
     normals: np.ndarray, half_lengths: np.ndarray, inlier_px: float = INLIER_PX,
     hypotheses: int = HYPOTHESES, seed: int = 0,
-) -> Frame:
+) -> ManhattanFrame:
     """The three orthogonal directions that most segments meet in (a Manhattan frame).
 
     Convention
@@ -226,12 +226,12 @@ def fit_manhattan_frame(
     good = (np.linalg.norm(v2, axis=1) > 0.5) & (picks[:, 0] != picks[:, 1])
     candidates = np.stack([v1, v2, v3], axis=2)[good]  # (H, 3, 3): columns are directions
     if len(candidates) == 0:
-        return Frame(np.eye(3), -np.ones(count, dtype=int), 0.0)
+        return ManhattanFrame(np.eye(3), -np.ones(count, dtype=int), 0.0)
     scores = _scores(normals, half_lengths, candidates, inlier_px)
     best = candidates[int(np.argmax(scores))]
     directions = _refine(normals, half_lengths, best, inlier_px)
     labels, score = _labels(normals, half_lengths, directions, inlier_px)
-    return Frame(directions, labels, score)
+    return ManhattanFrame(directions, labels, score)
 
 
 def _scores(normals: np.ndarray, half: np.ndarray, candidates: np.ndarray,
@@ -449,7 +449,7 @@ def _rotation_of(directions: np.ndarray, vertical: int, along: int, normal: int)
     return u @ vt
 
 
-def confidence_of(frame: Frame, half_lengths: np.ndarray) -> float:
+def confidence_of(frame: ManhattanFrame, half_lengths: np.ndarray) -> float:
     """How much the image says for its frame, 0 to 1: the fraction of the segments' length
     that meets in the frame, times ``1 - exp(-n / 8)`` for each of its two best-supported
     directions (``n`` their segments). A wall with a dozen vertical and a dozen horizontal
@@ -542,7 +542,7 @@ def _focal_of(ideal: np.ndarray, centre: np.ndarray, diagonal: float, side: floa
     (``f^2 = -(p1 - c).(p2 - c)``, else None: the image cannot tell), and the better of that
     and the grid's value is polished by :func:`polish_focal` until it settles.
     """
-    def fitted(f: float) -> tuple[Frame, float, float]:
+    def fitted(f: float) -> tuple[ManhattanFrame, float, float]:
         camera = Intrinsics(f, f, centre[0], centre[1])
         normals, half = interpretation_planes(ideal, _camera_from_pixel(camera))
         frame = fit_manhattan_frame(normals, half, inlier_px, hypotheses=GRID_HYPOTHESES)
