@@ -18,7 +18,7 @@ from ..inputs.calibration import CalibrationError
 from ..inputs.records import load_camera_file
 from ..inputs.sidecar import SidecarError, display_path
 from ..io.storage import location
-from ..io.targets import Drawings
+from ..io.targets import Drawings, file_identity, protected_files
 from ..tables.columns import ESTIMATE_COLUMNS
 from ..tables.writer import FORMATS, TableWriter, format_from_extension
 from .options import (
@@ -44,7 +44,6 @@ from .rectify import (
     end_batch,
     open_table,
     parse_pixel_count,
-    real,
     stop_on_signals,
 )
 
@@ -121,10 +120,8 @@ def estimate(inputs: tuple[str, ...], output: str | None, fmt: str | None, recur
     sources, unreadable = collect_sources(inputs, recursive)
     if not sources and not unreadable:
         raise InputError(f"no images found in {' '.join(inputs)}")
-    given = {real(source.path) for source in sources}
-    if sidecar is not None:
-        given.add(real(sidecar))
-    if output != "-" and real(location(output)) in given:
+    given = protected_files([*(source.path for source in sources), sidecar])
+    if output != "-" and file_identity(location(output)) in given:
         raise InputError(f"-o {output}: would overwrite an input; choose another path")
     prepare_table(output, "-o")
     drawings = None

@@ -66,6 +66,7 @@ from ..inputs.sources import (
 )
 from ..io.outputs import open_atomic, remove_stale_temporaries
 from ..io.storage import Location, location
+from ..io.targets import file_identity, protected_files
 from ..tables.writer import (
     TableWriter,
     format_from_extension,
@@ -192,11 +193,6 @@ def sources_at_url(text: str, url: Location, recursive: bool,
     return found
 
 
-def real(path: Path | Location) -> str:
-    """What a name stands for, to compare: a URL as it is, a path with links resolved."""
-    return str(path) if isinstance(path, Location) else os.path.realpath(path)
-
-
 def refuse_unsafe_outputs(
     inputs: tuple[str, ...], sources: list[Source], outputs: list[Path | Location],
     outdir: Path | Location, recursive: bool, table: Path | Location | None,
@@ -206,30 +202,28 @@ def refuse_unsafe_outputs(
     (local paths or URLs alike)."""
     if isinstance(outdir, Path) and outdir.exists() and not outdir.is_dir():
         raise InputError(f"-o {outdir}: exists and is not a directory")
-    given = {real(s.path) for s in sources}
+    given = protected_files(s.path for s in sources)
     for source, output in zip(sources, outputs):
-        if real(output) in given:
+        if file_identity(output) in given:
             raise InputError(
                 f"-o {outdir}: output {output} would overwrite the input {source.path}; "
                 "choose another output directory"
             )
     if recursive:
-        real_outdir = real(outdir)
+        real_outdir = file_identity(outdir)
         for text in inputs:
             given_input = location(text) if text != "-" else None
             if given_input is not None and (isinstance(given_input, Location)
                                             or given_input.is_dir()):
-                real_input = real(given_input)
+                real_input = file_identity(given_input)
                 separator = "/" if isinstance(given_input, Location) else os.sep
                 if real_outdir == real_input or real_outdir.startswith(real_input + separator):
                     raise InputError(
                         f"-o {outdir}: is inside the input directory {text}, where a later "
                         "--recursive run would take outputs for inputs; choose another"
                     )
-    if table is not None:
-        protected = given | ({real(sidecar)} if sidecar else set())
-        if real(table) in protected:
-            raise InputError(f"--table {table}: would overwrite an input; choose another path")
+    if table is not None and file_identity(table) in given | protected_files([sidecar]):
+        raise InputError(f"--table {table}: would overwrite an input; choose another path")
 
 
 def previous_rows(path: str, fmt: str) -> dict[tuple[str, str], dict[str, Any]]:

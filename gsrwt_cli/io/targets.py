@@ -94,10 +94,17 @@ def output_target(root: Path, relative: PurePosixPath | str) -> Path:
     return target
 
 
-def real_paths(paths: Iterable[Path | Location]) -> set[str]:
-    """The real paths (links resolved) of the local ``paths``; URLs (inputs read from a
-    store) are left out: no local file can be one."""
-    return {os.path.realpath(path) for path in paths if not isinstance(path, Location)}
+def file_identity(path: Path | Location) -> str:
+    """What a name stands for, to tell whether two names are one file: a URL as it is, a
+    local path with its links resolved (the one comparison every command's refusal to write
+    over an input makes)."""
+    return str(path) if isinstance(path, Location) else os.path.realpath(path)
+
+
+def protected_files(paths: Iterable[Path | Location | None]) -> set[str]:
+    """The :func:`file_identity` of every file a command was given (inputs, sidecars):
+    what it must never write over."""
+    return {file_identity(path) for path in paths if path is not None}
 
 
 def check_new_files(targets: Iterable[Path], inputs: Iterable[Path | Location],
@@ -105,9 +112,9 @@ def check_new_files(targets: Iterable[Path], inputs: Iterable[Path | Location],
     """Raise, for the first target in order that is one: :class:`InputOverwriteError` if
     it is one of ``inputs``, :class:`DirectoryTargetError` if it is a directory (no file can
     replace it), :class:`ExistingOutputError` if it exists (unless ``overwrite``)."""
-    protected = real_paths(inputs)
+    protected = protected_files(inputs)
     for target in targets:
-        if os.path.realpath(target) in protected:
+        if file_identity(target) in protected:
             raise InputOverwriteError(target)
         if os.path.isdir(target):
             raise DirectoryTargetError(target)
@@ -138,7 +145,7 @@ class Drawings:
 
     def __init__(self, directory: Path, inputs: Iterable[Path | Location]) -> None:
         self.directory = directory
-        self.protected = real_paths(inputs)
+        self.protected = protected_files(inputs)
         self.drawn: dict[str, Path] = {}  # real path of a picture -> the image it shows
 
     def target(self, image: Path | Location) -> Path:
@@ -148,7 +155,7 @@ class Drawings:
             output_target(self.directory, target.name)
         except OutsideOutputError as error:
             raise ValueError(f"its picture {target} {error}") from None
-        real = os.path.realpath(target)
+        real = file_identity(target)
         if real in self.protected:
             raise ValueError(f"its picture {target} would overwrite an input")
         if real in self.drawn:
