@@ -15,7 +15,6 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import cv2
 import numpy as np
 
 from ..api.estimate import DIRECTION_NAMES, WALL_CHOICES, EstimateError, PoseEstimate, estimate_pose
@@ -23,7 +22,6 @@ from ..geometry.camera import Intrinsics
 from ..imaging.images import (
     DEFAULT_MAX_INPUT_PIXELS,
     encode_image,
-    keep_freed_memory,
     read_image,
 )
 from ..inputs.focal import with_focal
@@ -33,6 +31,7 @@ from ..tables.columns import ESTIMATE_COLUMNS  # noqa: F401  (named here too)
 from .executor import ProcessExecutor
 from .in_order import run_in_order
 from .job_errors import error_text
+from .workers import ProcessWorker
 
 #: Fields of a record that give a pose: an estimate ignores them (it makes its own).
 _POSE_VALUES = ("pan", "tilt", "roll", *GSRWT_FIELDS, *POSE_FIELDS)
@@ -203,21 +202,14 @@ def process_estimate(job: EstimateJob, options: EstimateOptions,
     return row
 
 
-class EstimateWorker:
-    """One worker's state for ``gsrwt estimate``: the options."""
+class EstimateWorker(ProcessWorker):
+    """One estimate worker's state: the options and where pictures go."""
 
     def __init__(self, options: EstimateOptions, picture_root: Path | None,
                  opencv_threads: int = 0) -> None:
+        super().__init__(opencv_threads)
         self.options = options
         self.picture_root = picture_root
-        if opencv_threads:
-            cv2.setNumThreads(opencv_threads)
-
-    @classmethod
-    def in_own_process(cls, options: EstimateOptions, picture_root: Path | None,
-                       opencv_threads: int = 0) -> EstimateWorker:
-        keep_freed_memory()
-        return cls(options, picture_root, opencv_threads)
 
     def __call__(self, job: EstimateJob) -> dict[str, Any]:
         return process_estimate(job, self.options, picture_root=self.picture_root)

@@ -20,7 +20,6 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
-import cv2
 import numpy as np
 
 from ..api.rectify import plan_image
@@ -31,7 +30,6 @@ from ..imaging.images import (
     Scratch,
     check_writable,
     image_file_size,
-    keep_freed_memory,
     measure_image_file,
 )
 from ..inputs.focal import with_focal
@@ -48,6 +46,7 @@ from .in_order import run_in_order
 from .job_errors import JobError, error_text
 from .reruns import differences, is_regular_file, made_with, record_of
 from .settings import Describe, Settings  # noqa: F401  (named here too)
+from .workers import ProcessWorker
 
 # --------------------------------------------------------------------------------------------
 # Jobs: one per image, with its parameters found in the main process
@@ -298,21 +297,13 @@ def interrupted_row(job: Job, settings: Settings) -> dict[str, Any]:
     return row
 
 
-class ImageWorker:
-    """One worker's state: the settings and the memory reused from image to image."""
+class ImageWorker(ProcessWorker):
+    """One rectify worker's state: the settings and the memory reused from image to image."""
 
     def __init__(self, settings: Settings, opencv_threads: int = 0) -> None:
+        super().__init__(opencv_threads)
         self.settings = settings
         self.scratch = Scratch()
-        if opencv_threads:
-            cv2.setNumThreads(opencv_threads)
-
-    @classmethod
-    def in_own_process(cls, settings: Settings, opencv_threads: int = 0) -> ImageWorker:
-        """A worker for a process of its own, tuned as only such a process may be
-        (:func:`~gsrwt_cli.imaging.images.keep_freed_memory`)."""
-        keep_freed_memory()
-        return cls(settings, opencv_threads)
 
     def __call__(self, job: Job) -> dict[str, Any]:
         return process_job(job, self.settings, self.scratch)
