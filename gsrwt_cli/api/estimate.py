@@ -31,8 +31,7 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
-from ..geometry.camera import Intrinsics, Pose, View
-from ..geometry.framing import lens_distortion
+from ..geometry.camera import Intrinsics, Pose
 from ..geometry.rotations import PoseError, pose_from_rotation
 from ..vision.edges import grey8
 
@@ -514,7 +513,7 @@ def estimate_pose(
     if camera is not None:
         camera = Intrinsics(camera.fx, camera.fy, camera.cx, camera.cy, camera.skew,
                             width, height, camera.lens)
-        lens = lens_distortion(View(intrinsics=camera, pose=Pose(0.0, 0.0)))
+        lens = camera.distortion()
         if lens is not None:
             ideal = np.hstack([lens.undistort(detected[:, :2]), lens.undistort(detected[:, 2:])])
             reached = np.all(np.isfinite(ideal), axis=1)  # none beyond the lens's fold

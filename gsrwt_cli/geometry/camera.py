@@ -15,10 +15,14 @@ from __future__ import annotations
 import math
 import numbers
 from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..base.messages import quote
+
+if TYPE_CHECKING:
+    from .pixelmap import LensDistortion
 from .bounds import (  # noqa: F401  (the bounds of a view, named here too)
     DISTANCE_RANGE,
     MAX_FOCAL_PX,
@@ -214,6 +218,18 @@ class Intrinsics:
         """The camera matrix ``K`` (OpenCV's)."""
         cx, cy = self._principal_point()
         return np.array([[self.fx, self.skew, cx], [0.0, self.fy, cy], [0.0, 0.0, 1.0]])
+
+    def distortion(self) -> LensDistortion | None:
+        """This camera's lens as the pixel map applies it (OpenCV's model with this
+        camera's matrix), None for a pinhole: the one place it is built."""
+        if self.lens is None:
+            return None
+        from .pixelmap import LensDistortion  # with OpenCV: only for a camera with a lens
+
+        camera_matrix = tuple(tuple(float(v) for v in row) for row in self.matrix())
+        return LensDistortion(camera_matrix,
+                              tuple(float(v) for v in self.lens.opencv_coefficients()),
+                              self.lens.is_fisheye)
 
     def image_from_pixel(self) -> Matrix:
         """Pixel ``(col, row, 1)`` to the thesis's image frame ``(x up, y right, 1)`` at focal
@@ -432,6 +448,18 @@ class View:
 
     def _principal_point(self) -> tuple[float, float]:
         return self.intrinsics._principal_point()
+
+    def distortion(self) -> LensDistortion | None:
+        """This camera's lens as the pixel map applies it (OpenCV's model with this
+        camera's matrix), None for a pinhole: the one place it is built."""
+        if self.lens is None:
+            return None
+        from .pixelmap import LensDistortion  # with OpenCV: only for a camera with a lens
+
+        camera_matrix = tuple(tuple(float(v) for v in row) for row in self.matrix())
+        return LensDistortion(camera_matrix,
+                              tuple(float(v) for v in self.lens.opencv_coefficients()),
+                              self.lens.is_fisheye)
 
     def image_from_pixel(self) -> Matrix:
         """Pixel ``(col, row, 1)`` to the image frame of the camera at this pan and tilt

@@ -431,13 +431,9 @@ def _plan_output(view: View, framing: Framing, scale: float) -> Plan:
 
 
 def lens_distortion(view: View) -> LensDistortion | None:
-    """The view's lens as the pixel map applies it (None for a pinhole)."""
-    lens = view.intrinsics.lens
-    if lens is None:
-        return None
-    camera_matrix = tuple(tuple(float(v) for v in row) for row in view.intrinsics.matrix())
-    return LensDistortion(camera_matrix, tuple(float(v) for v in lens.opencv_coefficients()),
-                          lens.is_fisheye)
+    """The view's lens as the pixel map applies it (:meth:`Intrinsics.distortion`; None for a
+    pinhole)."""
+    return view.intrinsics.distortion()
 
 
 def texture_from_camera(view: View, texture_size: tuple[int, int]) -> Matrix:
