@@ -100,20 +100,17 @@ class InputError(click.ClickException):
         super().__init__(one_line(message))
 
 
-class LocalPath(click.Path):
+class LocalPath(PathOrUrl):
     """A local path (``click.Path``) for an option that takes no URL: a URL (``s3://``) is
     refused in one line rather than taken for a local name (``s3:/bucket``)."""
 
-    def __init__(self, **kwargs: Any) -> None:
-        super().__init__(path_type=Path, **kwargs)
-
     def convert(self, value: Any, param: click.Parameter | None,
                 ctx: click.Context | None) -> Any:
-        found = location(value) if isinstance(value, str) else value
+        found = super().convert(value, param, ctx)
         if isinstance(found, Location):
             option = max(param.opts, key=len) if param is not None and param.opts else ""
             raise InputError(f"{option} {value}: is a URL; {option} takes a local path")
-        return super().convert(str(found), param, ctx)
+        return found
 
 
 def report_error(message: str) -> None:

@@ -449,18 +449,6 @@ class View:
     def _principal_point(self) -> tuple[float, float]:
         return self.intrinsics._principal_point()
 
-    def distortion(self) -> LensDistortion | None:
-        """This camera's lens as the pixel map applies it (OpenCV's model with this
-        camera's matrix), None for a pinhole: the one place it is built."""
-        if self.lens is None:
-            return None
-        from .pixelmap import LensDistortion  # with OpenCV: only for a camera with a lens
-
-        camera_matrix = tuple(tuple(float(v) for v in row) for row in self.matrix())
-        return LensDistortion(camera_matrix,
-                              tuple(float(v) for v in self.lens.opencv_coefficients()),
-                              self.lens.is_fisheye)
-
     def image_from_pixel(self) -> Matrix:
         """Pixel ``(col, row, 1)`` to the image frame of the camera at this pan and tilt
         *without* roll (:meth:`Intrinsics.image_from_pixel`, then the roll undone:
