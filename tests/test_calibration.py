@@ -18,7 +18,8 @@ import cv2
 import numpy as np
 import pytest
 
-from gsrwt_cli.geometry.camera import Intrinsics, Lens
+from gsrwt_cli.geometry.camera import Intrinsics
+from gsrwt_cli.geometry.lens import Lens
 from gsrwt_cli.inputs.calibration import (
     MAX_FILE_BYTES,
     CalibrationError,
@@ -157,7 +158,7 @@ def test_a_file_written_by_opencv_4s_calibration_sample_reads():
 
 
 def _lens(model: str, count: int) -> Lens:
-    from gsrwt_cli.geometry.camera import LENS_MODELS
+    from gsrwt_cli.geometry.lens import LENS_MODELS
 
     values = [0.1 * (-1) ** index / (index + 1) for index in range(count)]
     return Lens(model, tuple(zip(LENS_MODELS[model][:count], values)))

@@ -16,7 +16,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from gsrwt_cli.api.estimate import PoseEstimate, estimate_pose
-from gsrwt_cli.geometry.camera import Intrinsics, Lens
+from gsrwt_cli.geometry.camera import Intrinsics
+from gsrwt_cli.geometry.lens import Lens
 
 VIEWS = Path(__file__).resolve().parent.parent / "sample_data" / "views"
 

@@ -23,7 +23,8 @@ import pytest
 from conftest import run_gsrwt
 
 from gsrwt_cli.base.messages import TOKEN_LIMIT
-from gsrwt_cli.geometry.camera import Intrinsics, Lens
+from gsrwt_cli.geometry.camera import Intrinsics
+from gsrwt_cli.geometry.lens import Lens
 from gsrwt_cli.inputs.calibration import (
     CalibrationError,
     load_camera,

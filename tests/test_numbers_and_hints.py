@@ -216,7 +216,8 @@ def test_a_frame_with_no_source_is_an_error_never_an_all_fill_ok(tmp_path, optio
     """An output whose every pixel would be fill is refused with the reason (it was ``ok``,
     all black, at pan 40 with the principal point right of the image); through a lens too
     (a calibration file with the principal point at (600, 120) and k1 = -0.05)."""
-    from gsrwt_cli.geometry.camera import Intrinsics, Lens
+    from gsrwt_cli.geometry.camera import Intrinsics
+    from gsrwt_cli.geometry.lens import Lens
     from gsrwt_cli.inputs.calibration import write_opencv_yaml
 
     write_opencv_yaml(tmp_path / "lens.yaml", Intrinsics(

@@ -18,7 +18,7 @@ import pytest
 from conftest import camera_axes, psnr, run_gsrwt, smooth_texture
 
 from gsrwt_cli import View
-from gsrwt_cli.geometry.camera import Lens
+from gsrwt_cli.geometry.lens import Lens
 from gsrwt_cli.tables.rows import params_row
 
 WIDTH, HEIGHT, DISTANCE = 320, 240, 10.0
@@ -486,10 +486,9 @@ def test_render_through_a_lens_and_rectify_it_back():
 def test_big_frames_lens_maps_interpolated_from_a_grid_err_under_a_hundredth_pixel(
         model, coefficients, focal):
     from gsrwt_cli.api.rectify import plan_image
-    from gsrwt_cli.geometry.framing import lens_distortion
 
     plan = plan_image(View(20, 15, focal, roll=7, lens=Lens(model, coefficients)), 2000, 1500)
-    lens = lens_distortion(plan.view)
+    lens = plan.view.intrinsics.distortion()
     grid_x, grid_y = lens.maps(plan.homography, plan.size)
     exact_x, exact_y = lens.maps(plan.homography, plan.size, step=1)  # every pixel by OpenCV
     inside = (exact_x > 0) & (exact_x < 1999) & (exact_y > 0) & (exact_y < 1499)
@@ -501,7 +500,6 @@ def test_big_frames_maps_reuse_the_last_frames_memory_and_stay_exact():
     """Maps of frames too big to keep several of are written into the memory of the last
     frame's maps: each pose's maps are still exactly those of a fresh computation."""
     from gsrwt_cli.api.rectify import plan_image
-    from gsrwt_cli.geometry.framing import lens_distortion
     from gsrwt_cli.geometry.pixelmap import MAP_CACHE, _MapCache
 
     lens_model = Lens("plumb_bob", (("k1", -0.2), ("k2", 0.05)))
@@ -509,7 +507,7 @@ def test_big_frames_maps_reuse_the_last_frames_memory_and_stay_exact():
     sizes = {plan.size for plan in plans}
     assert len(sizes) == 1  # the same frame, so the second reuses the first's memory
     cache = _MapCache(budget=4 * plans[0].size[0] * plans[0].size[1] * 8 - 1)
-    lens = lens_distortion(plans[0].view)
+    lens = plans[0].view.intrinsics.distortion()
     first = cache.get(lens, plans[0].homography, plans[0].size)
     first_copy = [part.copy() for part in first]
     second = cache.get(lens, plans[1].homography, plans[1].size)
@@ -529,14 +527,13 @@ def test_big_frames_revisited_poses_take_their_grid_from_the_cache():
     memory, and its maps are exactly a fresh computation's; the grids stay within their
     budget, oldest out first."""
     from gsrwt_cli.api.rectify import plan_image
-    from gsrwt_cli.geometry.framing import lens_distortion
     from gsrwt_cli.geometry.pixelmap import _MapCache
 
     lens_model = Lens("plumb_bob", (("k1", -0.2), ("k2", 0.05)))
     plans = [plan_image(View(pan, 10, 1800, lens=lens_model), 1600, 1200)
              for pan in (15, 25, 35)]
     size = plans[0].size
-    lens = lens_distortion(plans[0].view)
+    lens = plans[0].view.intrinsics.distortion()
     one_grid = 2 * 4 * (-(-size[0] // 4) + 3) * (-(-size[1] // 4) + 3)
     cache = _MapCache(budget=4 * size[0] * size[1] * 8 - 1, grid_budget=2 * one_grid)
     first = cache.get(lens, plans[0].homography, size)
@@ -556,7 +553,6 @@ def test_lens_shrink_from_the_maps_matches_the_lens_projection():
     """The anti-aliasing's shrink through a lens is read off the warp's own maps; it agrees
     with finite differences of the lens projection (cv2.projectPoints) to 1 %."""
     from gsrwt_cli.api.rectify import Framing, plan_image
-    from gsrwt_cli.geometry.framing import lens_distortion
     from gsrwt_cli.geometry.gsrwt import largest_singular_value
 
     plan = plan_image(View(55, 10, 700, lens=Lens("plumb_bob", (("k1", -0.25), ("k2", 0.06)))),
@@ -567,7 +563,7 @@ def test_lens_shrink_from_the_maps_matches_the_lens_projection():
     cols = np.arange(0, width + 31, 32, dtype=np.float64).clip(max=width - 1)
     rows = np.arange(0, height + 31, 32, dtype=np.float64).clip(max=height - 1)
     grid = np.stack(np.meshgrid(cols, rows), axis=-1).reshape(-1, 2)
-    lens = lens_distortion(plan.view)
+    lens = plan.view.intrinsics.distortion()
     ideal = cv2.perspectiveTransform(grid[None], np.linalg.inv(plan.homography))[0]
     here = lens.distort(ideal)
     right = lens.distort(cv2.perspectiveTransform(
@@ -726,12 +722,11 @@ def test_the_inverse_of_a_strong_lens_is_its_monotonic_part(model, coefficients)
     the image by OpenCV's projection, come back to their rays (where OpenCV's own fisheye
     inverse stops at 90 degrees of distorted angle); pixels beyond any ray's reach have no
     ideal pixel (NaN), and the lens never maps a ray beyond the fold."""
-    from gsrwt_cli.geometry.framing import lens_distortion
 
     focal = 200.0
-    lens = lens_distortion(View(0, 0, focal, width=WIDTH, height=HEIGHT,
-                                lens=Lens(model, tuple(zip(Lens(model).opencv_names(),
-                                                           coefficients)))))
+    lens = View(0, 0, focal, width=WIDTH, height=HEIGHT,
+                lens=Lens(model, tuple(zip(Lens(model).opencv_names(), coefficients)))
+                ).intrinsics.distortion()
     camera = OpenCVCamera(0, 0, 0, focal, focal, (WIDTH - 1) / 2, (HEIGHT - 1) / 2,
                           model=model, coefficients=coefficients)
     fold = min(fold_radius(camera), math.tan(math.radians(80)))

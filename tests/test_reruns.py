@@ -22,7 +22,8 @@ import pytest
 from conftest import run_gsrwt, smooth_texture
 from test_faults import POSE, make_photos, table_rows
 
-from gsrwt_cli.geometry.camera import Intrinsics, Lens
+from gsrwt_cli.geometry.camera import Intrinsics
+from gsrwt_cli.geometry.lens import Lens
 from gsrwt_cli.inputs.calibration import write_opencv_yaml
 
 BASE = ("--pan", "20", "--tilt", "10", "--focal", "500")

@@ -513,9 +513,9 @@ def estimate_pose(
     if camera is not None:
         camera = Intrinsics(camera.fx, camera.fy, camera.cx, camera.cy, camera.skew,
                             width, height, camera.lens)
-        lens = camera.distortion()
-        if lens is not None:
-            ideal = np.hstack([lens.undistort(detected[:, :2]), lens.undistort(detected[:, 2:])])
+        if camera.lens is not None:
+            ideal = np.hstack([camera.ideal_pixels(detected[:, :2]),
+                               camera.ideal_pixels(detected[:, 2:])])
             reached = np.all(np.isfinite(ideal), axis=1)  # none beyond the lens's fold
             detected, ideal = detected[reached], ideal[reached]
         return _estimate_known_focal(detected, ideal, camera, inlier_px, segments, False, wall)

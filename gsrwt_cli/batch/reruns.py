@@ -30,7 +30,7 @@ from ..inputs.records import SIDECAR_FIELDS, load_camera_file
 from ..tables.columns import PARAMS_COLUMNS
 
 if TYPE_CHECKING:
-    from ..geometry.camera import Lens
+    from ..geometry.lens import Lens
     from ..io.storage import Location
     from .settings import Settings
 

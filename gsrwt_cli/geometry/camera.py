@@ -2,27 +2,18 @@
 (where it looks), composed in :class:`View` with the wall's distance.
 
 ``View`` is the one object that carries what is known about how an image was taken; the
-intrinsics hold ``fx, fy, cx, cy, skew``, the size and a slot for a lens model, the pose pan,
-tilt and roll (0 for now), so real cameras grow here without changing callers. Pixel
-coordinates are ``(col, row)`` with row growing downward and pixel centres at integers.
-
-Over 400 lines: the intrinsics, the lens, the pose and the view they make check every value
-where it enters, and belong together.
+intrinsics hold ``fx, fy, cx, cy, skew``, the size and the lens (:mod:`.lens`), the pose pan,
+tilt and roll. Pixel coordinates are ``(col, row)`` with row growing downward and pixel centres
+at integers.
 """
 
 from __future__ import annotations
 
 import math
-import numbers
 from dataclasses import dataclass, field, replace
-from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..base.messages import quote
-
-if TYPE_CHECKING:
-    from .pixelmap import LensDistortion
 from .bounds import (  # noqa: F401  (the bounds of a view, named here too)
     DISTANCE_RANGE,
     MAX_FOCAL_PX,
@@ -31,6 +22,7 @@ from .bounds import (  # noqa: F401  (the bounds of a view, named here too)
     MIN_HORIZON_OFFSET_PX,
     VIEW_FIELDS,
 )
+from .checks import ViewError, as_number, check_range
 from .gsrwt import (
     GsrwtParameters,
     Matrix,
@@ -39,112 +31,7 @@ from .gsrwt import (
     interception,
     map_points,
 )
-
-
-class ViewError(ValueError):
-    """An invalid camera parameter; ``field`` names the offending parameter."""
-
-    def __init__(self, field_name: str, message: str) -> None:
-        super().__init__(message)
-        self.field = field_name
-
-
-def _as_number(name: str, value: object) -> float | int | None:
-    """``value`` as a finite Python number (numpy scalars and big integers too), else ViewError."""
-    if value is None:
-        return None
-    if isinstance(value, bool) or not isinstance(value, numbers.Real):
-        raise ViewError(name, f"{name} must be a number, got {quote(value)}")
-    given = value
-    try:
-        if type(value) not in (int, float):  # numpy scalars, Fractions: plain Python numbers
-            value = int(value) if isinstance(value, numbers.Integral) else float(value)
-        finite = math.isfinite(value)
-    except OverflowError:  # an int or a Fraction too large for a float
-        finite = False
-    if not finite:
-        raise ViewError(name, f"{name} must be a finite number, got {quote(given)}")
-    return value
-
-
-def _check_range(name: str, value: float, low: float, high: float, unit: str) -> None:
-    """``low < value < high``; ``low`` 0 reads "positive"."""
-    if value <= low:
-        what = "positive" if low == 0 else f"above {low:g}{unit}"
-        raise ViewError(name, f"{name} must be {what}, got {value:.15g}")
-    if value >= high:
-        raise ViewError(name, f"{name} must be below {high:g}{unit}, got {value:.15g}")
-
-
-#: Lens models (docs/CONVENTIONS.md, "Lens distortion") and the coefficients each takes, in
-#: OpenCV's order.
-LENS_MODELS = {
-    "plumb_bob": ("k1", "k2", "p1", "p2", "k3"),
-    "rational_polynomial": ("k1", "k2", "p1", "p2", "k3", "k4", "k5", "k6",
-                            "s1", "s2", "s3", "s4", "tau_x", "tau_y"),
-    "equidistant": ("k1", "k2", "k3", "k4"),
-}
-#: Other names people use for them (ROS's ``radtan``, OpenCV's ``fisheye``).
-LENS_ALIASES = {"radtan": "plumb_bob", "fisheye": "equidistant"}
-#: Every coefficient any model takes (the sidecar columns of a lens).
-LENS_FIELDS = LENS_MODELS["rational_polynomial"]
-
-
-@dataclass(frozen=True)
-class Lens:
-    """A lens distortion model as OpenCV applies it (docs/CONVENTIONS.md).
-
-    ``model``: ``plumb_bob`` (k1, k2, p1, p2, k3), ``rational_polynomial`` (k1..k6, p1, p2,
-    thin prism s1..s4, tilt tau_x, tau_y) or ``equidistant`` (the fisheye model of
-    ``cv2.fisheye``, k1..k4); ``coefficients`` by name, absent ones 0.
-    """
-
-    model: str
-    coefficients: tuple[tuple[str, float], ...] = ()
-
-    def __post_init__(self) -> None:
-        model = LENS_ALIASES.get(self.model, self.model)
-        if model not in LENS_MODELS:
-            raise ViewError("distortion_model", f"unknown lens model {quote(self.model)}; use "
-                            f"one of {', '.join(LENS_MODELS)}")
-        object.__setattr__(self, "model", model)
-        allowed = LENS_MODELS[model]
-        checked = []
-        for name, value in dict(self.coefficients).items():
-            if name not in allowed:
-                raise ViewError(name, f"the {model} model has no coefficient {name}")
-            number = _as_number(name, value)
-            if abs(number) >= 1e6:
-                raise ViewError(name, f"{name} must be within 1e6 of 0, got {number:.15g}")
-            checked.append((name, number))
-        checked.sort(key=lambda coefficient: allowed.index(coefficient[0]))
-        object.__setattr__(self, "coefficients", tuple(checked))
-
-    @property
-    def is_fisheye(self) -> bool:
-        return self.model == "equidistant"
-
-    def value(self, name: str) -> float:
-        return dict(self.coefficients).get(name, 0.0)
-
-    @property
-    def is_identity(self) -> bool:
-        """No distortion at all (every coefficient 0): a pinhole."""
-        return all(value == 0 for _, value in self.coefficients)
-
-    def opencv_names(self) -> tuple[str, ...]:
-        """The coefficients of the vector OpenCV's functions take, in its order: 4 for the
-        fisheye model, 5 for plumb_bob, 8 or (with prism or tilt terms) 14 for rational."""
-        names = LENS_MODELS[self.model]
-        if self.model == "rational_polynomial" and not any(
-            self.value(name) for name in names[8:]
-        ):
-            names = names[:8]
-        return names
-
-    def opencv_coefficients(self) -> np.ndarray:
-        """The vector OpenCV's functions take (:meth:`opencv_names`)."""
-        return np.array([self.value(name) for name in self.opencv_names()], dtype=np.float64)
+from .lens import LENS_ALIASES, LENS_FIELDS, LENS_MODELS, Lens, LensDistortion  # noqa: F401
 
 
 @dataclass(frozen=True)
@@ -169,9 +56,9 @@ class Intrinsics:
 
     def __post_init__(self) -> None:
         for name in ("fx", "fy", "cx", "cy", "skew", "width", "height"):
-            object.__setattr__(self, name, _as_number(name, getattr(self, name)))
+            object.__setattr__(self, name, as_number(name, getattr(self, name)))
         for name in ("fx", "fy"):
-            _check_range(name, getattr(self, name), 0, MAX_FOCAL_PX, " pixels")
+            check_range(name, getattr(self, name), 0, MAX_FOCAL_PX, " pixels")
         for name in ("cx", "cy", "skew"):
             value = getattr(self, name)
             if value is not None and abs(value) >= MAX_PRINCIPAL_POINT_PX:
@@ -183,7 +70,7 @@ class Intrinsics:
             value = getattr(self, name)
             if value is None:
                 continue
-            _check_range(name, value, 0, math.inf, "")
+            check_range(name, value, 0, math.inf, "")
             if value > MAX_SIDE_PX:
                 raise ViewError(
                     name, f"{name} must be at most {MAX_SIDE_PX} pixels, got {value:.15g}"
@@ -224,8 +111,6 @@ class Intrinsics:
         camera's matrix), None for a pinhole: the one place it is built."""
         if self.lens is None:
             return None
-        from .pixelmap import LensDistortion  # with OpenCV: only for a camera with a lens
-
         camera_matrix = tuple(tuple(float(v) for v in row) for row in self.matrix())
         return LensDistortion(camera_matrix,
                               tuple(float(v) for v in self.lens.opencv_coefficients()),
@@ -262,19 +147,31 @@ class Intrinsics:
             ]
         )
 
+    def ideal_pixels(self, pixels: np.ndarray) -> np.ndarray:
+        """``(N, 2)`` pixels of the image to where a pinhole with the same ``K`` puts their
+        rays: the lens undone (the same pixels for a pinhole); NaN where no ray reaches
+        (beyond where the lens model folds back)."""
+        lens = self.distortion()
+        pixels = np.asarray(pixels, dtype=np.float64)
+        return pixels if lens is None else lens.undistort(pixels)
+
     def rays_from_pixels(self, pixels: np.ndarray) -> np.ndarray:
         """``(N, 2)`` pixels to ``(N, 3)`` ray directions in the thesis's camera frame
-        (``X`` up, ``Y`` right, ``Z`` forward), with ``Z = 1``."""
-        image = map_points(self.image_from_pixel(), pixels)
+        (``X`` up, ``Y`` right, ``Z`` forward), with ``Z = 1``: through the lens, if there is
+        one (:meth:`ideal_pixels`), then ``K^-1`` (Eq. 3.1 read backwards)."""
+        image = map_points(self.image_from_pixel(), self.ideal_pixels(pixels))
         return np.column_stack([image / self.focal, np.ones(len(image))])
 
     def pixels_from_rays(self, rays: np.ndarray) -> np.ndarray:
-        """``(N, 3)`` ray directions in the thesis's camera frame to ``(N, 2)`` pixels
-        (rays with ``Z <= 0`` come back as ``inf``/``nan``)."""
+        """``(N, 3)`` ray directions in the thesis's camera frame to ``(N, 2)`` pixels, through
+        ``K`` and then the lens, if there is one (rays with ``Z <= 0``, or beyond the lens's
+        fold, come back as ``inf``/``nan``)."""
         rays = np.asarray(rays, dtype=np.float64)
         with np.errstate(divide="ignore", invalid="ignore"):
             image = self.focal * rays[:, :2] / rays[:, 2:3]
-        return map_points(self.pixel_from_image(), image)
+        ideal = map_points(self.pixel_from_image(), image)
+        lens = self.distortion()
+        return ideal if lens is None else lens.distort(ideal)
 
 
 @dataclass(frozen=True)
@@ -293,7 +190,7 @@ class Pose:
 
     def __post_init__(self) -> None:
         for name in ("pan", "tilt", "roll"):
-            object.__setattr__(self, name, _as_number(name, getattr(self, name)))
+            object.__setattr__(self, name, as_number(name, getattr(self, name)))
         for name in ("pan", "tilt"):
             value = getattr(self, name)
             if abs(value) >= 90.0:
@@ -386,9 +283,9 @@ class View:
                     raise ViewError(name, f"{name} is required")
             pose = Pose(pan, tilt, roll)  # type: ignore[arg-type]
         if intrinsics is None:
-            focal = _as_number("focal", focal)
+            focal = as_number("focal", focal)
             if focal is not None:
-                _check_range("focal", focal, 0, MAX_FOCAL_PX, " pixels")
+                check_range("focal", focal, 0, MAX_FOCAL_PX, " pixels")
             if (fx is None) != (fy is None):
                 missing = "fy" if fy is None else "fx"
                 raise ViewError(missing, "fx and fy must be given together")
@@ -397,9 +294,9 @@ class View:
                     raise ViewError("focal", "focal is required")
                 fx = fy = focal
             intrinsics = Intrinsics(fx, fy, cx, cy, skew, width, height, lens)
-        distance = _as_number("distance", distance)
+        distance = as_number("distance", distance)
         if distance is not None:
-            _check_range("distance", distance, *DISTANCE_RANGE, "")
+            check_range("distance", distance, *DISTANCE_RANGE, "")
         object.__setattr__(self, "intrinsics", intrinsics)
         object.__setattr__(self, "pose", pose)
         object.__setattr__(self, "distance", distance)

@@ -15,7 +15,8 @@ import numpy as np
 
 from .camera import View
 from .gsrwt import Matrix, local_stretch, map_points
-from .pixelmap import LensDistortion, PixelMap
+from .lens import LensDistortion
+from .pixelmap import PixelMap
 
 
 def canonical_from_pixel(view: View) -> Matrix:
@@ -147,7 +148,7 @@ def full_frame(
     cols = np.linspace(-0.5, view.width - 0.5, samples)
     rows = np.linspace(-0.5, view.height - 0.5, samples)
     grid = np.stack(np.meshgrid(cols, rows), axis=-1).reshape(-1, 2)
-    lens = lens_distortion(view)
+    lens = view.intrinsics.distortion()
     if lens is not None:  # the distorted image's pixels, as a pinhole would have seen them
         grid = lens.undistort(grid)  # NaN where no ray within the lens's limit reaches
         grid = grid[np.all(np.isfinite(grid), axis=1)]
@@ -189,7 +190,7 @@ def crop_frame(
     centres = lattice - 0.5  # pixel edges to the default frame's pixel centres
     ideal = map_points(input_from_output, centres)
     w = centres @ input_from_output[2, :2] + input_from_output[2, 2]
-    lens = lens_distortion(view)
+    lens = view.intrinsics.distortion()
     sources = ideal if lens is None else lens.distort(ideal)
     with np.errstate(invalid="ignore"):
         good = (w > 0) & np.all(np.isfinite(sources), axis=1)
@@ -283,7 +284,7 @@ class FrameOutsideImageError(ValueError):
 
 class BeyondLensLimitError(ValueError):
     """All the output lies beyond the radius where the lens model folds back
-    (:attr:`~gsrwt_cli.geometry.pixelmap.LensDistortion.limit`): nothing in it has a source."""
+    (:attr:`~gsrwt_cli.geometry.lens.LensDistortion.limit`): nothing in it has a source."""
 
     def __init__(self, lens: LensDistortion) -> None:
         angle = math.degrees(math.atan(lens.limit))
@@ -417,7 +418,7 @@ def _plan_output(view: View, framing: Framing, scale: float) -> Plan:
     if width * height > framing.max_pixels:
         raise OutputTooLargeError(width, height, framing.max_pixels)
     homography = frame.output_from_default() @ output_from_input(view)
-    pixel_map = PixelMap(homography, (width, height), lens_distortion(view))
+    pixel_map = PixelMap(homography, (width, height), view.intrinsics.distortion())
     if not sees_within_lens_limit(pixel_map):
         raise BeyondLensLimitError(pixel_map.lens)
     if not pixel_map.sees((view.width, view.height)):
@@ -428,12 +429,6 @@ def _plan_output(view: View, framing: Framing, scale: float) -> Plan:
         raise FrameOutsideImageError(bbox if isinstance(bbox, str) else "box",
                                      beyond_horizon=bool(np.all(w <= 0)))
     return Plan(view, frame, pixel_map)
-
-
-def lens_distortion(view: View) -> LensDistortion | None:
-    """The view's lens as the pixel map applies it (:meth:`Intrinsics.distortion`; None for a
-    pinhole)."""
-    return view.intrinsics.distortion()
 
 
 def texture_from_camera(view: View, texture_size: tuple[int, int]) -> Matrix:
@@ -465,4 +460,4 @@ def render_map(view: View, texture_size: tuple[int, int]) -> PixelMap:
         raise ValueError("the view needs an image size (width and height) to render")
     camera_from_texture = np.linalg.inv(texture_from_camera(view, texture_size))
     return PixelMap(camera_from_texture, (view.width, view.height),
-                    output_lens=lens_distortion(view))
+                    output_lens=view.intrinsics.distortion())

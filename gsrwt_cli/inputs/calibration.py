@@ -58,7 +58,8 @@ import numpy as np
 import yaml
 
 from ..base.messages import one_line, quote, token
-from ..geometry.camera import LENS_ALIASES, LENS_MODELS, Intrinsics, Lens, ViewError
+from ..geometry.camera import Intrinsics, ViewError
+from ..geometry.lens import LENS_ALIASES, LENS_MODELS, Lens
 from ..io.safe_yaml import YamlInputError, load_yaml
 from ..io.storage import location, open_input
 

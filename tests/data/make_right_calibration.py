@@ -97,7 +97,8 @@ def write_poses(path: Path, calibration: Calibration) -> None:
 
 def main() -> None:
     sys.path.insert(0, str(HERE.parent.parent))
-    from gsrwt_cli.geometry.camera import Intrinsics, Lens
+    from gsrwt_cli.geometry.camera import Intrinsics
+    from gsrwt_cli.geometry.lens import Lens
     from gsrwt_cli.inputs.calibration import write_opencv_xml, write_opencv_yaml, write_ros_yaml
 
     calibration = calibrate()
