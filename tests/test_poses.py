@@ -22,7 +22,7 @@ from gsrwt_cli.geometry.gsrwt import camera_from_world
 from gsrwt_cli.geometry.rotations import (
     QUATERNION_NORM_SQUARED_TOLERANCE,
     THESIS_FROM_OPENCV,
-    PoseAngles,
+    Pose,
     PoseError,
     distance_from_tvec,
     opencv_from_world_from_camera,
@@ -54,7 +54,7 @@ def angle_difference(a: float, b: float) -> float:
     return (a - b + 180.0) % 360.0 - 180.0
 
 
-def assert_same_pose(got: PoseAngles, pan: float, tilt: float, roll: float, tol: float = 1e-8):
+def assert_same_pose(got: Pose, pan: float, tilt: float, roll: float, tol: float = 1e-8):
     assert got.pan == pytest.approx(pan, abs=tol)
     assert got.tilt == pytest.approx(tilt, abs=tol)
     assert abs(angle_difference(got.roll, roll)) < tol
@@ -227,7 +227,7 @@ def test_a_rotation_printed_to_seven_digits_is_accepted():
 
 def test_angles_come_back_as_plain_floats_without_negative_zero():
     pose = pose_from_rotation(np.eye(3))
-    assert pose == (0.0, 0.0, 0.0)
+    assert tuple(pose) == (0.0, 0.0, 0.0)
     assert all(type(a) is float and math.copysign(1, a) == 1 for a in pose)
 
 
@@ -281,7 +281,7 @@ def test_rodrigues_at_the_awkward_angles(rvec):
 def test_numpy_scalars_are_numbers():
     assert rotation_from_pose(np.float32(10), np.int64(5), np.float64(-3)) == pytest.approx(
         rotation_from_pose(10.0, 5.0, -3.0), abs=1e-15)
-    assert pose_from_quaternion(*np.array(quaternion_from_pose(10, 5, -3), np.float32)) == (
+    assert tuple(pose_from_quaternion(*np.array(quaternion_from_pose(10, 5, -3), np.float32))) == (
         pytest.approx((10, 5, -3), abs=1e-4))
     for bad in (math.nan, math.inf, "ten", None):
         with pytest.raises(PoseError, match="pan"):
@@ -344,7 +344,8 @@ def test_rvec_to_pose_and_back_is_the_same_rotation(x, y, z):
 @given(pan=pans, tilt=tilts, roll=rolls)
 def test_q_and_minus_q_are_the_same_pose(pan, tilt, roll):
     q = np.array(quaternion_from_pose(pan, tilt, roll))
-    assert pose_from_quaternion(*q) == pytest.approx(pose_from_quaternion(*-q), abs=1e-10)
+    assert tuple(pose_from_quaternion(*q)) == pytest.approx(tuple(pose_from_quaternion(*-q)),
+                                                        abs=1e-10)
 
 
 def test_the_canonical_quaternion_of_a_half_turn():
@@ -357,7 +358,8 @@ def test_quaternions_near_unit_length_are_normalized_others_refused():
     q = np.array(quaternion_from_pose(20, -15, 40))
     expected = pose_from_quaternion(*q)
     for scale in (0.996, 1.004, math.sqrt(1 + 0.99 * QUATERNION_NORM_SQUARED_TOLERANCE)):
-        assert pose_from_quaternion(*(scale * q)) == pytest.approx(expected, abs=1e-10)
+        assert tuple(pose_from_quaternion(*(scale * q))) == pytest.approx(tuple(expected),
+                                                                          abs=1e-10)
     rounded = np.round(q, 3)
     assert_same_pose(pose_from_quaternion(*rounded), *expected, tol=0.2)
     for scale in (0.9, 1.1, 2.0, math.sqrt(1 + 1.01 * QUATERNION_NORM_SQUARED_TOLERANCE)):
@@ -376,8 +378,8 @@ def test_quaternions_near_unit_length_are_normalized_others_refused():
 
 def test_a_camera_facing_the_wall_squarely():
     """rvec = 0, q = 1: the wall frame's axes are the camera's, pan = tilt = roll = 0."""
-    assert pose_from_rvec([0.0, 0.0, 0.0]) == (0.0, 0.0, 0.0)
-    assert pose_from_quaternion(1.0, 0.0, 0.0, 0.0) == (0.0, 0.0, 0.0)
+    assert tuple(pose_from_rvec([0.0, 0.0, 0.0])) == (0.0, 0.0, 0.0)
+    assert tuple(pose_from_quaternion(1.0, 0.0, 0.0, 0.0)) == (0.0, 0.0, 0.0)
     np.testing.assert_array_equal(rvec_from_pose(0, 0, 0), [0.0, 0.0, 0.0])
     assert quaternion_from_pose(0, 0, 0) == (1.0, 0.0, 0.0, 0.0)
     assert distance_from_tvec([0, 0, 0], [0.3, -0.2, 2.5]) == 2.5
@@ -573,7 +575,7 @@ def undistorted_rays(pixels: np.ndarray, k: np.ndarray, dist: np.ndarray) -> np.
     return np.column_stack([normalized, np.ones(len(normalized))])
 
 
-def frontal_residual(rays_cv: np.ndarray, pose: PoseAngles, distance: float, f: float,
+def frontal_residual(rays_cv: np.ndarray, pose: Pose, distance: float, f: float,
                      wall: np.ndarray) -> tuple[np.ndarray, float]:
     """View camera rays through the thesis's frontal camera (the world frame, f pixels) and
     compare with the wall points at ``f / distance`` pixels per unit, no rotation allowed.

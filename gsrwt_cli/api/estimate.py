@@ -581,8 +581,7 @@ def _estimate_known_focal(detected: np.ndarray, ideal: np.ndarray, camera: Intri
         lengths = np.bincount(frame.labels[frame.labels >= 0],
                               weights=half[frame.labels >= 0], minlength=3)
         world_from_camera, order = world_from_camera_of(frame.directions, lengths, wall)
-        angles = pose_from_rotation(world_from_camera)
-        pose = Pose(angles.pan, angles.tilt, angles.roll)
+        pose = pose_from_rotation(world_from_camera)
     except (PoseError, ValueError) as error:
         return _failure(f"no pose: {error}", detected, segments, found, camera.focal, estimated,
                         frame.labels)

@@ -26,12 +26,11 @@ from .checks import ViewError, as_number, check_range
 from .gsrwt import (
     GsrwtParameters,
     Matrix,
-    camera_from_world,
     gsrwt_parameters,
-    interception,
     map_points,
 )
 from .lens import LENS_ALIASES, LENS_FIELDS, LENS_MODELS, Lens, LensDistortion  # noqa: F401
+from .rotations import Pose
 
 
 @dataclass(frozen=True)
@@ -172,61 +171,6 @@ class Intrinsics:
         ideal = map_points(self.pixel_from_image(), image)
         lens = self.distortion()
         return ideal if lens is None else lens.distort(ideal)
-
-
-@dataclass(frozen=True)
-class Pose:
-    """Where a camera looks, relative to the wall: ``pan``, ``tilt``, ``roll`` in degrees.
-
-    ``pan > 0`` turns left, ``tilt > 0`` tilts up (Sec. 3.2), both strictly between -90
-    and 90. ``roll`` turns the camera about its optical axis after them (docs/CONVENTIONS.md):
-    ``world_from_camera = Rx(pan) Ry(tilt) Rz(roll)``; ``roll > 0`` leans the camera's top to
-    the right (seen from behind it), so the scene appears turned counter-clockwise.
-    """
-
-    pan: float
-    tilt: float
-    roll: float = 0.0
-
-    def __post_init__(self) -> None:
-        for name in ("pan", "tilt", "roll"):
-            object.__setattr__(self, name, as_number(name, getattr(self, name)))
-        for name in ("pan", "tilt"):
-            value = getattr(self, name)
-            if abs(value) >= 90.0:
-                raise ViewError(
-                    name,
-                    f"{name} must be strictly between -90 and 90 degrees (the camera cannot see "
-                    f"the wall otherwise), got {value:g}",
-                )
-        if abs(self.roll) > 180.0:
-            raise ViewError("roll", f"roll must be within -180 and 180 degrees, got "
-                            f"{self.roll:g}")
-
-    def camera_from_world(self) -> Matrix:
-        """The rotation whose rows are the camera's axes in the wall's frame (Eq. 3.8, then
-        the roll about the optical axis): ``(Rx(pan) Ry(tilt) Rz(roll))^T``."""
-        return self.unrolled_from_rolled().T @ camera_from_world(self.pan, self.tilt)
-
-    def unrolled_from_rolled(self) -> Matrix:
-        """``Rz(roll)``: directions of the rolled camera in the camera at the same pan and
-        tilt without roll (thesis frame, X up, Y right). In the image frame (x up, y right)
-        the same matrix turns the rolled camera's image points into the unrolled one's."""
-        if self.roll == 0:
-            return np.eye(3)
-        angle = math.radians(self.roll)
-        c, s = math.cos(angle), math.sin(angle)
-        return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
-
-    @property
-    def theta_deg(self) -> float:
-        """The angle between image plane and wall (Eq. 4.15): no focal length needed."""
-        return interception(self.pan, self.tilt)[0]
-
-    @property
-    def foreshortening(self) -> float:
-        """``cos theta = cos alpha cos beta`` (Eq. 4.15)."""
-        return interception(self.pan, self.tilt)[1]
 
 
 @dataclass(frozen=True, init=False)

@@ -44,12 +44,15 @@ checks that keep them honest.
 from __future__ import annotations
 
 import math
-from typing import NamedTuple
+from collections.abc import Iterator
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..base.messages import quote
+from .checks import ViewError, as_number
+from .gsrwt import camera_from_world, interception
 
 Matrix = NDArray[np.float64]
 Vector = NDArray[np.float64]
@@ -74,13 +77,63 @@ class PoseError(ValueError):
     """A rotation or translation that is no camera pose facing a wall; the message says why."""
 
 
-class PoseAngles(NamedTuple):
-    """A pose in degrees: ``pan``, ``tilt`` strictly within (-90, 90),
-    ``roll`` within [-180, 180]."""
+@dataclass(frozen=True)
+class Pose:
+    """Where a camera looks, relative to the wall: ``pan``, ``tilt``, ``roll`` in degrees.
+
+    ``pan > 0`` turns left, ``tilt > 0`` tilts up (Sec. 3.2), both strictly between -90
+    and 90. ``roll`` turns the camera about its optical axis after them (docs/CONVENTIONS.md):
+    ``world_from_camera = Rx(pan) Ry(tilt) Rz(roll)``; ``roll > 0`` leans the camera's top to
+    the right (seen from behind it), so the scene appears turned counter-clockwise.
+    """
 
     pan: float
     tilt: float
-    roll: float
+    roll: float = 0.0
+
+    def __post_init__(self) -> None:
+        for name in ("pan", "tilt", "roll"):
+            object.__setattr__(self, name, as_number(name, getattr(self, name)))
+        for name in ("pan", "tilt"):
+            value = getattr(self, name)
+            if abs(value) >= 90.0:
+                raise ViewError(
+                    name,
+                    f"{name} must be strictly between -90 and 90 degrees (the camera cannot see "
+                    f"the wall otherwise), got {value:g}",
+                )
+        if abs(self.roll) > 180.0:
+            raise ViewError("roll", f"roll must be within -180 and 180 degrees, got "
+                            f"{self.roll:g}")
+
+    def __iter__(self) -> Iterator[float]:
+        """``pan, tilt, roll = pose``."""
+        return iter((self.pan, self.tilt, self.roll))
+
+    def camera_from_world(self) -> Matrix:
+        """The rotation whose rows are the camera's axes in the wall's frame (Eq. 3.8, then
+        the roll about the optical axis): ``(Rx(pan) Ry(tilt) Rz(roll))^T``."""
+        return self.unrolled_from_rolled().T @ camera_from_world(self.pan, self.tilt)
+
+    def unrolled_from_rolled(self) -> Matrix:
+        """``Rz(roll)``: directions of the rolled camera in the camera at the same pan and
+        tilt without roll (thesis frame, X up, Y right). In the image frame (x up, y right)
+        the same matrix turns the rolled camera's image points into the unrolled one's."""
+        if self.roll == 0:
+            return np.eye(3)
+        angle = math.radians(self.roll)
+        c, s = math.cos(angle), math.sin(angle)
+        return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+    @property
+    def theta_deg(self) -> float:
+        """The angle between image plane and wall (Eq. 4.15): no focal length needed."""
+        return interception(self.pan, self.tilt)[0]
+
+    @property
+    def foreshortening(self) -> float:
+        """``cos theta = cos alpha cos beta`` (Eq. 4.15)."""
+        return interception(self.pan, self.tilt)[1]
 
 
 # --------------------------------------------------------------------------------------------
@@ -172,7 +225,7 @@ def rotation_from_pose(pan: float, tilt: float, roll: float = 0.0) -> Matrix:
     return _rx(alpha) @ _ry(beta) @ _rz(rho)
 
 
-def pose_from_rotation(world_from_camera: ArrayLike) -> PoseAngles:
+def pose_from_rotation(world_from_camera: ArrayLike) -> Pose:
     """Pan, tilt and roll in degrees of a ``world_from_camera`` rotation.
 
     ``tilt = asin(W[0,2])``, ``pan = atan2(-W[1,2], W[2,2])``, and ``roll`` from
@@ -201,7 +254,7 @@ def pose_from_rotation(world_from_camera: ArrayLike) -> PoseAngles:
             f"the wall is edge-on to the camera (pan {pan:.12g}, tilt {tilt:.12g}): "
             "both must be strictly between -90 and 90 degrees"
         )
-    return PoseAngles(_plain(pan), _plain(tilt), _plain(roll))
+    return Pose(_plain(pan), _plain(tilt), _plain(roll))
 
 
 # --------------------------------------------------------------------------------------------
@@ -371,7 +424,7 @@ def rvec_from_rotation(rotation: ArrayLike) -> Vector:
 # --------------------------------------------------------------------------------------------
 
 
-def pose_from_rvec(rvec: ArrayLike) -> PoseAngles:
+def pose_from_rvec(rvec: ArrayLike) -> Pose:
     """Pan, tilt, roll (degrees) of ``solvePnP``'s ``rvec``: ``camera_from_wall`` in OpenCV's
     frames (wall x right, y down, z into the wall; camera x right, y down, z forward).
 
@@ -402,7 +455,7 @@ def rvec_from_pose(pan: float, tilt: float, roll: float = 0.0) -> Vector:
     return rvec_from_rotation(opencv_from_world_from_camera(rotation_from_pose(pan, tilt, roll)))
 
 
-def pose_from_quaternion(qw: float, qx: float, qy: float, qz: float) -> PoseAngles:
+def pose_from_quaternion(qw: float, qx: float, qy: float, qz: float) -> Pose:
     """Pan, tilt, roll (degrees) of a quaternion of ``camera_from_wall`` in OpenCV's frames.
 
     The same rotation as ``rvec`` (:func:`pose_from_rvec`), as a Hamilton quaternion, scalar
