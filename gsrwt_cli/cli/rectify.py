@@ -1,5 +1,10 @@
 """``gsrwt rectify``: canonical frontal views of whole directories, and a table of what was done.
 
+The command reads in four steps: its options into the objects the layers below take
+(:func:`settings_from_options`, :func:`table_from_options`, :class:`RunOptions`), every check
+before any image is read (:func:`plan_batch`), the run with its table (:func:`run_planned`),
+and the summary line.
+
 Over 400 lines: the main command's options, its checks before any work, and the wording of
 the core's errors in terms of those options.
 """
@@ -32,6 +37,7 @@ from ..batch.rectify_jobs import (
     RECTIFY_COLUMNS,
     Counts,
     ImageWorker,
+    Job,
     Settings,
     dead_worker_row,
     job_for_elsewhere,
@@ -515,15 +521,8 @@ def dask_executor(address: str, processes: int, retries: int,
               help="With --auto: the wall to rectify is the vertical plane with the most "
                    "horizontal edges (the surface the photo shows) or the most frontal one "
                    "(|pan| <= 45, as 'gsrwt estimate' reports poses).")
-def rectify(
-    inputs: tuple[str, ...], outdir: Path, recursive: bool, sidecar: Path | None, bbox: str,
-    max_stretch: float, scale: float | None, px_per_unit: float | None, max_pixels: str,
-    interpolation: str, fill: float, alpha: bool, ext: str | None, quality: int,
-    table_path: str | None, jobs: int | None, overwrite: bool, dry_run: bool, quiet: bool,
-    max_input_pixels: str, antialias: bool, max_size: str | None, shard: str | None,
-    scheduler: str | None, retries: int, auto: bool, min_confidence: float, wall: str,
-    **view_kwargs: Any,
-) -> None:
+def rectify(inputs: tuple[str, ...], outdir: Path | Location, recursive: bool,
+            sidecar: Path | Location | None, **options: Any) -> None:
     """Rectify images into canonical frontal views of the wall they show (GS-RWT).
 
     INPUT is an image, a directory of images, or - to read paths from standard input.
@@ -539,56 +538,151 @@ def rectify(
       find sample_data/views -name '*.jpg' | gsrwt rectify - \\
           --sidecar sample_data/views/views.csv -o from-stdin
     """
-    fork_workers = getattr(click.get_current_context().find_root().obj, "fork_workers", False)
-    box = parse_bbox(bbox)
+    run = RunOptions.pop_from(options)
+    settings, extension = settings_from_options(outdir, options)
+    table = table_from_options(outdir, options.pop("table_path"), options.pop("shard"))
+    estimating = (EstimateOptions(options.pop("min_confidence"), options.pop("wall"),
+                                  settings.max_input_pixels)
+                  if options.pop("auto") else None)
+    batch = plan_batch(inputs, outdir, recursive, sidecar, table, settings, extension,
+                       estimating, view_kwargs=options)
+    counts, stopped = run_planned(batch, settings, table, run)
+    summary = f"{counts.ok} ok, {counts.skipped} skipped, {counts.failed} failed"
+    if settings.dry_run:
+        summary = f"{counts.planned} planned, {summary}"
+    if stopped is not None:
+        summary += f", {counts.interrupted} not done"
+    end_batch(summary, "" if table.path == "-" else f"; table: {table.path}", stopped,
+              counts.failed, run.quiet)
+
+
+@dataclass(frozen=True)
+class RunOptions:
+    """How the batch runs: ``jobs`` processes (or a Dask ``scheduler`` with ``retries``),
+    and whether it is ``quiet``; ``fork_workers``: the test suite's faster start-up."""
+
+    jobs: int
+    scheduler: str | None
+    retries: int
+    quiet: bool
+    fork_workers: bool
+
+    @classmethod
+    def pop_from(cls, options: dict[str, Any]) -> RunOptions:
+        root = click.get_current_context().find_root().obj
+        return cls(options.pop("jobs") or os.cpu_count() or 1, options.pop("scheduler"),
+                   options.pop("retries"), options.pop("quiet"),
+                   getattr(root, "fork_workers", False))
+
+
+def settings_from_options(outdir: Path | Location, options: dict[str, Any]
+                          ) -> tuple[Settings, str | None]:
+    """The run's :class:`Settings` (framing, resampling, output format) and the output
+    extension (``--ext``), from the options, which it takes out of ``options``; a bad value
+    is a usage error naming its option."""
+    bbox = parse_bbox(options.pop("bbox"))
+    scale, px_per_unit = options.pop("scale"), options.pop("px_per_unit")
+    max_stretch = options.pop("max_stretch")
     positive("--max-stretch", max_stretch)
     positive("--scale", scale)
     positive("--px-per-unit", px_per_unit)
     if scale is not None and px_per_unit is not None:
         raise click.UsageError("use either --scale or --px-per-unit, not both")
-    pixel_limit = parse_pixel_count(max_pixels, "--max-pixels")
-    input_pixel_limit = parse_pixel_count(max_input_pixels, "--max-input-pixels")
+    max_size = options.pop("max_size")
     size_limit = parse_size(max_size) if max_size is not None else None
-    extension = None
-    if ext is not None:
-        extension = canonical_extension(ext)
+    alpha = options.pop("alpha")
+    extension = options.pop("ext")
+    if extension is not None:
+        extension = canonical_extension(extension)
         try:
             check_writable(extension, "uint8", 4 if alpha else 3)
         except ImageFormatError as error:
             raise click.BadParameter(error.reason, param_hint="'--ext'") from None
         except ImageError as error:
             raise click.BadParameter(str(error).split(";")[0], param_hint="'--ext'") from None
+    settings = Settings(
+        framing=Framing(bbox=bbox, scale=scale or 1.0, px_per_unit=px_per_unit,
+                        max_stretch=max_stretch,
+                        max_pixels=parse_pixel_count(options.pop("max_pixels"), "--max-pixels"),
+                        max_size=size_limit),
+        interpolation=options.pop("interpolation"), fill=options.pop("fill"), alpha=alpha,
+        quality=options.pop("quality"), overwrite=options.pop("overwrite"),
+        dry_run=options.pop("dry_run"),
+        max_input_pixels=parse_pixel_count(options.pop("max_input_pixels"),
+                                           "--max-input-pixels"),
+        root=outdir,
+        describe=RectifyWording(bbox if isinstance(bbox, str) else "box",
+                                px_per_unit is not None, size_limit is not None),
+        antialias=options.pop("antialias"),
+    )
+    return settings, extension
+
+
+@dataclass(frozen=True)
+class TableTarget:
+    """Where the run's table goes: ``path`` (``-`` for stdout) in ``format``; ``default``:
+    the output directory's own table, which says what made the outputs already there;
+    ``shard``: ``(k, n)`` when this run is one of n slices."""
+
+    path: str
+    format: str
+    default: str
+    shard: tuple[int, int] | None
+
+
+def table_from_options(outdir: Path | Location, table_path: str | None, shard: str | None
+                       ) -> TableTarget:
+    """``--table`` and ``--shard`` checked: a shard's table is named for its slice, a table
+    file's name ends in a format's extension."""
     shard_k_n = None
     if shard is not None:
         try:
             shard_k_n = parse_shard(shard)
         except ValueError as error:
             raise click.BadParameter(str(error), param_hint="'--shard'") from None
-    table_format = "csv"
     name = shard_table_name("gsrwt.csv", *shard_k_n) if shard_k_n else "gsrwt.csv"
-    default_table = str(outdir / name)  # the record of the outputs in OUTDIR
+    default = str(outdir / name)  # the record of the outputs in OUTDIR
     if table_path is None:
-        table_path = default_table
-    elif table_path != "-":
+        return TableTarget(default, "csv", default, shard_k_n)
+    table_format = "csv"
+    if table_path != "-":
         table_format = format_from_extension(table_path) or ""
         if table_format not in ("csv", "tsv", "json", "jsonl"):
             raise click.BadParameter(
                 "the table's name must end in .csv, .tsv, .json or .jsonl (or be -)",
                 param_hint="'--table'",
             )
+    return TableTarget(table_path, table_format, default, shard_k_n)
 
+
+@dataclass
+class PlannedBatch:
+    """The jobs of this run (this shard's), the problems met listing the inputs, and the
+    rows of the table this run replaces, by ``(image, output)``."""
+
+    jobs: list[Job]
+    unreadable: list[str]
+    previous: dict[tuple[str, str], dict[str, Any]]
+
+
+def plan_batch(inputs: tuple[str, ...], outdir: Path | Location, recursive: bool,
+               sidecar: Path | Location | None, table: TableTarget, settings: Settings,
+               extension: str | None, estimating: EstimateOptions | None,
+               view_kwargs: dict[str, Any]) -> PlannedBatch:
+    """Every check before any image is read: the inputs listed, the sidecar and --camera
+    read, nothing the user gave us overwritten, the output directory and table writable;
+    then the jobs planned (one shard's), and stale temporaries of a killed run removed."""
     loaded = load_sidecar_option(sidecar)
     sources, unreadable = collect_sources(inputs, recursive)
     if not sources and not unreadable:
         raise InputError(f"no images found in {' '.join(inputs)}")
     if isinstance(outdir, Location):  # a store is asked before its listing plans the jobs
-        if not dry_run:
+        if not settings.dry_run:
             prepare_directory(outdir, f"-o {outdir}")
         try:
             outdir.exists()
         except OSError as error:
             raise InputError(f"-o {outdir}: cannot read ({error.strerror or error})") from None
-    estimating = EstimateOptions(min_confidence, wall, input_pixel_limit) if auto else None
     job_list = plan_jobs(sources, outdir, loaded, view_defaults(view_kwargs), extension,
                          estimating)
     if view_kwargs.get("camera"):
@@ -600,58 +694,53 @@ def rectify(
     # that cannot be used is an error row of each image that names it (never the batch's).
     refuse_unsafe_outputs(
         inputs, sources, [job.output for job in job_list], outdir, recursive,
-        None if table_path == "-" else location(table_path), sidecar,
+        None if table.path == "-" else location(table.path), sidecar,
     )
-    if not dry_run:
+    if not settings.dry_run:
         prepare_directory(outdir, f"-o {outdir}")
-    prepare_table(table_path, "--table")
-    if shard_k_n is not None:  # the whole list is planned and checked, one slice is run
-        job_list = [job_list[index] for index in shard_slice(len(job_list), *shard_k_n)]
+    prepare_table(table.path, "--table")
     names = None
-    if shard_k_n is not None:  # other shards may be writing beside ours, from other machines
-        names = {job.output.name for job in job_list} | {location(table_path).name}
+    if table.shard is not None:  # the whole list is planned and checked, one slice is run
+        job_list = [job_list[index] for index in shard_slice(len(job_list), *table.shard)]
+        # other shards may be writing beside ours, from other machines
+        names = {job.output.name for job in job_list} | {location(table.path).name}
     for directory in sorted({job.output.parent for job in job_list} | {outdir}, key=str):
         if not isinstance(directory, Location):  # object stores have no temporaries
             remove_stale_temporaries(directory, names=names)
     # What made the outputs that exist: the table this run replaces (to stdout: OUTDIR's).
-    previous = (previous_rows(table_path, table_format) if table_path != "-"
-                else previous_rows(default_table, "csv"))
+    previous = (previous_rows(table.path, table.format) if table.path != "-"
+                else previous_rows(table.default, "csv"))
+    return PlannedBatch(job_list, unreadable, previous)
 
-    settings = Settings(
-        framing=Framing(bbox=box, scale=scale or 1.0, px_per_unit=px_per_unit,
-                        max_stretch=max_stretch, max_pixels=pixel_limit,
-                        max_size=size_limit),
-        interpolation=interpolation, fill=fill, alpha=alpha,
-        quality=quality, overwrite=overwrite, dry_run=dry_run,
-        max_input_pixels=input_pixel_limit, root=outdir,
-        describe=RectifyWording(box if isinstance(box, str) else "box",
-                                px_per_unit is not None, size_limit is not None),
-        antialias=antialias,
-    )
-    processes = jobs or os.cpu_count() or 1
+
+def run_planned(batch: PlannedBatch, settings: Settings, table: TableTarget, run: RunOptions
+                ) -> tuple[Counts, BaseException | None]:
+    """Run the jobs (on local processes or the Dask scheduler) with a progress bar, writing
+    the table row by row; returns the counts and the signal that stopped the run, if one did
+    (every job then still has its row)."""
     tqdm.monitor_interval = 0  # no monitor thread: workers may fork from this process
     progress = tqdm(
-        total=len(job_list), unit="img", file=sys.stderr, dynamic_ncols=True,
-        disable=quiet or not sys.stderr.isatty(),
+        total=len(batch.jobs), unit="img", file=sys.stderr, dynamic_ncols=True,
+        disable=run.quiet or not sys.stderr.isatty(),
     )
-    for problem in unreadable:
+    for problem in batch.unreadable:
         progress.write(f"Error: {one_line(problem)}", file=sys.stderr)
-    counts = Counts(failed=len(unreadable))
+    counts = Counts(failed=len(batch.unreadable))
     stopped: BaseException | None = None
     try:
         with stop_on_signals(), contextlib.ExitStack() as cluster:
             executor = None
-            if scheduler:
+            if run.scheduler:
                 executor = cluster.enter_context(
-                    dask_executor(scheduler, processes, retries, settings))
-            stream = cluster.enter_context(open_table(table_path))
-            writer = TableWriter(stream, RECTIFY_COLUMNS, table_format)
+                    dask_executor(run.scheduler, run.jobs, run.retries, settings))
+            stream = cluster.enter_context(open_table(table.path))
+            writer = TableWriter(stream, RECTIFY_COLUMNS, table.format)
 
             def on_row(row: dict[str, Any]) -> None:
                 try:
                     writer.write_row(row)
                 except OSError as error:
-                    if table_path == "-":
+                    if table.path == "-":
                         raise
                     raise TableWriteError(error.strerror or str(error)) from None
                 counts.add(row)
@@ -660,9 +749,9 @@ def rectify(
                                    file=sys.stderr)
 
             try:
-                run_batch(job_list, settings, processes, on_row,
-                          on_progress=lambda: progress.update(1), previous=previous,
-                          context=worker_context(fork_workers), executor=executor)
+                run_batch(batch.jobs, settings, run.jobs, on_row,
+                          on_progress=lambda: progress.update(1), previous=batch.previous,
+                          context=worker_context(run.fork_workers), executor=executor)
             except (KeyboardInterrupt, Terminated) as stop:
                 stopped = stop  # every job has its row: the table is still written whole
             try:
@@ -670,13 +759,7 @@ def rectify(
             except OSError as error:
                 raise TableWriteError(error.strerror or str(error)) from None
     except TableWriteError as error:
-        raise InputError(f"--table {table_path}: cannot write the table ({error})") from None
+        raise InputError(f"--table {table.path}: cannot write the table ({error})") from None
     finally:
         progress.close()
-    summary = f"{counts.ok} ok, {counts.skipped} skipped, {counts.failed} failed"
-    if dry_run:
-        summary = f"{counts.planned} planned, {summary}"
-    if stopped is not None:
-        summary += f", {counts.interrupted} not done"
-    end_batch(summary, "" if table_path == "-" else f"; table: {table_path}", stopped,
-              counts.failed, quiet)
+    return counts, stopped
