@@ -16,7 +16,7 @@ import pytest
 from conftest import run_gsrwt
 
 from gsrwt_cli.batch.rectify_jobs import RECTIFY_COLUMNS
-from gsrwt_cli.tables.writer import MAX_SHARDS, order_shards, shard_slice
+from gsrwt_cli.tables.shards import MAX_SHARDS, order_shards, shard_slice
 
 SAMPLES = Path(__file__).resolve().parent.parent / "sample_data" / "views"
 

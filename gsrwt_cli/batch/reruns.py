@@ -28,6 +28,7 @@ from ..base.messages import shorten
 from ..imaging.images import image_file_size
 from ..inputs.records import SIDECAR_FIELDS, load_camera_file
 from ..tables.columns import PARAMS_COLUMNS
+from ..tables.shards import RECTIFY_TABLE
 
 if TYPE_CHECKING:
     from ..geometry.lens import Lens
@@ -52,8 +53,6 @@ _INTEGER_TEXT = re.compile(r"[1-9][0-9]{0,9}")
 _GENERAL_NUMBER = re.compile(r"[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
 _WORD = re.compile(r"[a-z0-9_.]+=[^\s=]*")
 _NUMBER_COLUMNS = tuple(c for c in PARAMS_COLUMNS if c not in ("image", "horizon_in_image"))
-_FOCAL_SOURCES = ("option", "sidecar", "camera", "exif", "estimated")
-_POSE_SOURCES = ("sidecar", "yaml", "options", "estimated")
 #: Statuses of a row that records its output (an error row may keep the record of an output
 #: it did not redo); ``interrupted`` rows never do.
 _RECORD_STATUSES = ("ok", "skipped", "error")
@@ -230,6 +229,15 @@ def check_record(row: Mapping[str, Any], columns: tuple[str, ...]) -> dict[str, 
     :class:`~gsrwt_cli.tables.writer.TableWriter` writes it (types, choices, lengths), the output's
     size, scale, homography and ``made_with`` given. Returns the row restricted to
     ``columns``; raises :class:`InvalidRecordError` naming the first bad column."""
+    text = all(value is None or isinstance(value, str) for value in row.values())
+    problem = RECTIFY_TABLE.cell_problem(row, text)
+    if problem is not None:  # the kinds every reader of the table checks
+        column, kind = problem
+        raise InvalidRecordError(f"{column} is not {kind.expected}")
+    # A record is also as the writer writes it: bounded, numbers to fixed decimals, and
+    # says where its focal length came from.
+    if row.get("focal_source") in (None, ""):
+        raise InvalidRecordError("focal_source is empty")
     for column in ("image", "output"):
         value = row.get(column)
         if not isinstance(value, str) or not value or len(value) > NAME_LIMIT:
@@ -237,9 +245,6 @@ def check_record(row: Mapping[str, Any], columns: tuple[str, ...]) -> dict[str, 
     for column in _NUMBER_COLUMNS:
         _check_number(row, column, required=column in ("pan_deg", "tilt_deg", "fx_px",
                                                        "fy_px"))
-    _check_choice(row, "horizon_in_image", ("true", "false"))
-    _check_choice(row, "focal_source", _FOCAL_SOURCES, required=True)
-    _check_choice(row, "pose_source", _POSE_SOURCES)
     _check_number(row, "confidence")
     confidence = _text(row, "confidence")
     if confidence is not None and not 0 <= float(confidence) <= 1:

@@ -73,14 +73,8 @@ from ..inputs.sources import (
 from ..io.outputs import open_atomic, remove_stale_temporaries
 from ..io.storage import Location, location
 from ..io.targets import file_identity, protected_files
-from ..tables.writer import (
-    TableWriter,
-    format_from_extension,
-    parse_shard,
-    read_table,
-    shard_slice,
-    shard_table_name,
-)
+from ..tables.shards import parse_shard, shard_slice, shard_table_name
+from ..tables.writer import TableWriter, format_from_extension, read_table
 from .options import (
     InputError,
     Integer,

@@ -13,34 +13,17 @@ import click
 from ..base.messages import quote
 from ..io.outputs import open_atomic
 from ..io.storage import Location, location
-from ..tables.writer import (
-    FLAG,
-    MATRIX,
-    NAME,
-    NUMBER,
-    POSITIVE_WHOLE,
+from ..tables.shards import (
+    RECTIFY_TABLE,
     MergeError,
-    TableSchema,
-    choice,
-    format_from_extension,
     order_shards,
     read_shard_table,
     write_merged,
 )
+from ..tables.writer import format_from_extension
 from .options import InputError, prepare_table, quiet_option
 
 MACHINE_FORMATS = ("csv", "tsv", "json", "jsonl")
-
-
-def rectify_table() -> TableSchema:
-    """The table ``gsrwt rectify`` writes, each of its columns with what its cells hold."""
-    from ..tables.columns import PARAMS_COLUMNS, RECTIFY_COLUMNS
-
-    kinds = {name: NUMBER for name in (*PARAMS_COLUMNS, "confidence", "scale")}
-    kinds.update(image=NAME, horizon_in_image=FLAG, out_width=POSITIVE_WHOLE,
-                 out_height=POSITIVE_WHOLE, homography=MATRIX,
-                 status=choice("ok", "skipped", "error", "interrupted", "planned"))
-    return TableSchema("gsrwt rectify", tuple(RECTIFY_COLUMNS), kinds)
 
 
 def table_format(name: str, option: str) -> str:
@@ -115,7 +98,7 @@ def merge(shard_tables: tuple[str, ...], output: str, quiet: bool) -> None:
     if output != "-" and output in ordered:
         raise InputError(f"-o {output}: is one of the tables to merge; choose another path")
     prepare_table(output, "-o")
-    schema = rectify_table()
+    schema = RECTIFY_TABLE
     parts = []
     for name in ordered:  # every table read and checked before anything is written
         fmt = table_format(name, "")

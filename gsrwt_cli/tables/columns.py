@@ -20,6 +20,12 @@ RECTIFY_COLUMNS = (
     "out_height", "scale", "homography", "made_with", "status", "error",
 )
 
+#: Where a rectify row's focal length and pose came from (``focal_source``, ``pose_source``),
+#: and the statuses of its rows.
+FOCAL_SOURCES = ("option", "sidecar", "camera", "exif", "estimated")
+POSE_SOURCES = ("sidecar", "yaml", "options", "estimated")
+RECTIFY_STATUSES = ("ok", "skipped", "error", "interrupted", "planned")
+
 #: The vanishing points ``gsrwt estimate`` reports, in the estimator's order (its
 #: ``DIRECTION_NAMES``).
 VANISHING_DIRECTIONS = ("vertical", "wall", "normal")
