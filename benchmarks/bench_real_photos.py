@@ -46,6 +46,7 @@ import real_photos as measure  # noqa: E402
 
 REPOSITORY = Path(__file__).resolve().parent.parent
 DEFAULT_DATA = REPOSITORY.parent / "shared" / "data" / "york-urban-train"
+OTHER_PHOTOS = REPOSITORY / "tests" / "data" / "real"
 GSRWT = Path(sys.executable).with_name("gsrwt")
 
 
@@ -200,6 +201,94 @@ def evaluate(data: Path, jobs: int = 1) -> list[RunResult]:
     return runs
 
 
+@dataclass
+class OtherPhoto:
+    """One photo of ``tests/data/real`` (its row of ``photos.csv``) and what ``gsrwt estimate``
+    (no focal length) and ``gsrwt rectify --auto`` made of it."""
+
+    image: str
+    structure: str
+    expected: str
+    estimate_status: str
+    estimate_confidence: float | None
+    estimate_pose: tuple[float, float, float] | None
+    estimate_focal: float | None
+    true_focal: float | None
+    auto_status: str
+    auto_confidence: float | None
+    auto_pose: tuple[float, float, float] | None
+    error: str
+
+    @property
+    def wrongly_accepted(self) -> tuple[bool, bool]:
+        """(estimate, --auto) gave ``ok`` for a photo that must be refused."""
+        refuse = self.expected == "refuse"
+        return refuse and self.estimate_status == "ok", refuse and self.auto_status == "ok"
+
+
+def _pose(row: dict[str, str], *names: str) -> tuple[float, float, float] | None:
+    return tuple(float(row[name]) for name in names) if row.get("status") == "ok" else None
+
+
+def evaluate_other_photos(folder: Path = OTHER_PHOTOS, jobs: int = 1) -> list[OtherPhoto]:
+    """``gsrwt estimate`` (no focal length: the photos carry no EXIF) and ``gsrwt rectify
+    --auto`` over the photos ``folder/photos.csv`` lists, one subprocess each."""
+    with open(folder / "photos.csv", newline="") as file:
+        manifest = list(csv.DictReader(file))
+    with tempfile.TemporaryDirectory(prefix="gsrwt-real-") as temporary:
+        scratch = Path(temporary)
+        estimates, _, _ = run_estimate(folder, None, jobs, scratch / "estimate.csv")
+        table = scratch / "auto.csv"
+        done = subprocess.run(
+            [str(GSRWT), "rectify", str(folder), "--auto", "-o", str(scratch / "out"),
+             "--table", str(table), "-j", str(jobs), "-q"], capture_output=True, text=True)
+        if done.returncode not in (0, 1) or not table.exists():
+            raise SystemExit(f"gsrwt rectify --auto failed (exit {done.returncode}): "
+                             f"{done.stderr.strip()}")
+        with open(table, newline="") as file:
+            autos = {Path(row["image"]).name: row for row in csv.DictReader(file)}
+    by_image = {Path(row["image"]).name: row for row in estimates}
+    photos = []
+    for entry in manifest:
+        estimate = by_image.get(entry["image"], {"status": "missing"})
+        auto = autos.get(entry["image"], {"status": "missing"})
+        photos.append(OtherPhoto(
+            entry["image"], entry["structure"], entry["expected"], estimate["status"],
+            _number(estimate.get("confidence", "")), _pose(estimate, "pan", "tilt", "roll"),
+            _number(estimate.get("focal", "")), _number(entry.get("focal_px", "")),
+            auto["status"], _number(auto.get("confidence", "")),
+            _pose(auto, "pan_deg", "tilt_deg", "roll_deg"),
+            estimate.get("error", "") or auto.get("error", "")))
+    return photos
+
+
+def report_other_photos(photos: list[OtherPhoto]) -> str:
+    """The table of :func:`evaluate_other_photos`, as text."""
+    must_refuse = [p for p in photos if p.expected == "refuse"]
+    planar = [p for p in photos if p.expected == "right"]
+    lines = [
+        f"other real photos ({OTHER_PHOTOS.relative_to(REPOSITORY)}, no focal length): "
+        f"{len(must_refuse)} must be refused, {len(planar)} have planar structure",
+        f"  must be refused but ok: estimate {sum(p.wrongly_accepted[0] for p in photos)}, "
+        f"--auto {sum(p.wrongly_accepted[1] for p in photos)} of {len(must_refuse)}; "
+        f"planar photos ok: estimate {sum(p.estimate_status == 'ok' for p in planar)}, "
+        f"--auto {sum(p.auto_status == 'ok' for p in planar)} of {len(planar)}",
+        "  photo              expected | estimate: status conf   pan  tilt  roll  focal "
+        "| rectify --auto: status conf   pan  tilt  roll",
+    ]
+    for p in photos:
+        pose = (" ".join(f"{angle:5.1f}" for angle in p.estimate_pose) if p.estimate_pose
+                else " " * 17)
+        auto = " ".join(f"{angle:5.1f}" for angle in p.auto_pose) if p.auto_pose else ""
+        focal = _format(p.estimate_focal, 0) + (f" (true {p.true_focal:.0f})"
+                                                 if p.true_focal else "")
+        lines.append(
+            f"  {p.image:18s} {p.expected:8s} | {p.estimate_status:6s} "
+            f"{_format(p.estimate_confidence):>4s} {pose} {focal:>5s} | {p.auto_status:6s} "
+            f"{_format(p.auto_confidence):>4s} {auto}")
+    return "\n".join(lines)
+
+
 def _format(value: float, digits: int = 2) -> str:
     return "-" if value is None or math.isnan(value) else f"{value:.{digits}f}"
 
@@ -302,11 +391,15 @@ def main() -> None:
         parser.exit(2, f"bench_real_photos: no York Urban data at {data} (needs truth.csv and "
                        "images/); give its path as the first argument\n")
     runs = evaluate(data, arguments.jobs)
+    others = evaluate_other_photos(OTHER_PHOTOS, arguments.jobs)
     if arguments.json:
-        print(json.dumps(_no_nan(as_json(runs, data, arguments.jobs)), indent=1,
-                         allow_nan=False))
+        result = as_json(runs, data, arguments.jobs)
+        result["other_photos"] = [asdict(p) for p in others]
+        print(json.dumps(_no_nan(result), indent=1, allow_nan=False))
     else:
         print(report(runs, data, arguments.jobs))
+        print()
+        print(report_other_photos(others))
 
 
 if __name__ == "__main__":
