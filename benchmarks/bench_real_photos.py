@@ -1,0 +1,406 @@
+"""Accuracy, refusals, confidence and time of ``gsrwt estimate`` on real photos with a known
+orientation: the York Urban DB's training half (51 photos, 640x480, one calibrated camera).
+
+Two runs of ``gsrwt estimate`` over all the photos, each one subprocess:
+
+- **calibrated focal**: a sidecar gives each photo its calibrated focal length and principal
+  point (``truth.csv``);
+- **no focal**: copies of the photos with their EXIF removed (losslessly: the JPEG's APP1
+  segments dropped, the image data untouched) and no intrinsics at all, so the focal length is
+  estimated from the image and the principal point is the image's centre.
+
+Measured as the data's README says (``benchmarks/real_photos.py``): the angle between the
+estimated and true world-up, and between the estimated wall normal and the nearer true
+horizontal (as lines), median / 90th percentile / worst, an image with no estimate counting
+90 degrees; the refusals (status not ok); the "confidently wrong" (status ok and more than
+3 degrees off on either measure); the focal length's error where estimated; the calibration
+of ``confidence`` (per bin, the fraction within 2 degrees on both measures); CPU time of the
+subprocess (it and its workers) and wall time, per photo, the program's start included.
+
+    python benchmarks/bench_real_photos.py [PATH-TO-york-urban-train] [--json] [--jobs N]
+
+PATH defaults to ``../shared/data/york-urban-train`` beside the repository.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import datetime
+import json
+import math
+import os
+import platform
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import real_photos as measure  # noqa: E402
+
+REPOSITORY = Path(__file__).resolve().parent.parent
+DEFAULT_DATA = REPOSITORY.parent / "shared" / "data" / "york-urban-train"
+OTHER_PHOTOS = REPOSITORY / "tests" / "data" / "real"
+GSRWT = Path(sys.executable).with_name("gsrwt")
+
+
+@dataclass
+class PhotoResult:
+    """One photo's estimate and its errors."""
+
+    image: str
+    status: str
+    confidence: float | None
+    focal: float | None
+    focal_source: str
+    true_focal: float
+    vertical: float
+    wall: float
+    error: str
+
+
+@dataclass
+class RunResult:
+    """One ``gsrwt estimate`` run over all the photos."""
+
+    name: str
+    photos: list[PhotoResult]
+    cpu_seconds: float
+    wall_seconds: float
+    vertical: measure.Summary = field(init=False)
+    wall: measure.Summary = field(init=False)
+
+    def __post_init__(self) -> None:
+        self.vertical = measure.summarize(p.vertical for p in self.photos)
+        self.wall = measure.summarize(p.wall for p in self.photos)
+
+    @property
+    def refused(self) -> list[PhotoResult]:
+        return [p for p in self.photos if p.status != "ok"]
+
+    @property
+    def confidently_wrong(self) -> list[PhotoResult]:
+        return [p for p in self.photos if measure.is_confidently_wrong(
+            p.status == "ok", measure.ImageErrors(p.vertical, p.wall))]
+
+    def focal_errors(self) -> measure.Summary:
+        """Relative error of the focal length (percent) over the ok photos whose focal length
+        was estimated."""
+        return measure.summarize(
+            100 * measure.relative_error(p.focal, p.true_focal) for p in self.photos
+            if p.status == "ok" and p.focal_source == "estimated" and p.focal is not None)
+
+    def calibration(self) -> list[measure.CalibrationBin]:
+        ok = [p for p in self.photos if p.status == "ok" and p.confidence is not None]
+        return measure.calibration_bins(
+            [p.confidence for p in ok],
+            [measure.is_within(measure.ImageErrors(p.vertical, p.wall)) for p in ok])
+
+
+def read_truth(data: Path) -> dict[str, dict[str, str]]:
+    """``truth.csv``'s rows by image name."""
+    with open(data / "truth.csv", newline="") as file:
+        return {row["image"]: row for row in csv.DictReader(file)}
+
+
+def true_directions(row: dict[str, str]) -> measure.SceneDirections:
+    """The truth row's ``up_*``, ``wall_*``, ``side_*`` vectors (OpenCV camera frame)."""
+    return measure.SceneDirections(*(
+        np.array([float(row[f"{name}_{axis}"]) for axis in "xyz"])
+        for name in ("up", "wall", "side")))
+
+
+def strip_exif(jpeg: bytes) -> bytes:
+    """The JPEG without its APP1 segments (EXIF, XMP): the segments before the scan are
+    walked by their lengths and every other byte is kept, so the pixels do not change."""
+    if jpeg[:2] != b"\xff\xd8":
+        raise ValueError("not a JPEG (no SOI marker)")
+    kept, position = [jpeg[:2]], 2
+    while position + 4 <= len(jpeg) and jpeg[position] == 0xFF:
+        marker = jpeg[position + 1]
+        if marker == 0xDA:  # start of scan: the rest is image data
+            break
+        end = position + 2 + int.from_bytes(jpeg[position + 2:position + 4], "big")
+        if marker != 0xE1:
+            kept.append(jpeg[position:end])
+        position = end
+    kept.append(jpeg[position:])
+    return b"".join(kept)
+
+
+def run_estimate(images: Path, sidecar: Path | None, jobs: int, output: Path
+                 ) -> tuple[list[dict[str, str]], float, float]:
+    """``gsrwt estimate IMAGES [--sidecar S] -o OUTPUT``: its rows, the CPU seconds of the
+    subprocess and its workers, and the wall seconds."""
+    command = [str(GSRWT), "estimate", str(images), "-o", str(output), "-j", str(jobs), "-q"]
+    if sidecar is not None:
+        command += ["--sidecar", str(sidecar)]
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    start = time.perf_counter()
+    done = subprocess.run(command, capture_output=True, text=True)
+    wall = time.perf_counter() - start
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    if done.returncode not in (0, 1) or not output.exists():
+        raise SystemExit(f"gsrwt estimate failed (exit {done.returncode}): {done.stderr.strip()}")
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    with open(output, newline="") as file:
+        return list(csv.DictReader(file)), cpu, wall
+
+
+def _number(text: str) -> float | None:
+    return float(text) if text not in ("", None) else None
+
+
+def measure_run(name: str, rows: list[dict[str, str]], truth: dict[str, dict[str, str]],
+                cpu: float, wall: float) -> RunResult:
+    """Each photo's errors from ``gsrwt estimate``'s rows (a photo without a row counts as
+    refused)."""
+    by_image = {row["image"]: row for row in rows}
+    photos = []
+    for image, true in sorted(truth.items()):
+        row = by_image.get(image, {"status": "missing", "error": "no row in the output"})
+        ok = row.get("status") == "ok"
+        estimate = (measure.directions_from_pose(float(row["pan"]), float(row["tilt"]),
+                                                 float(row["roll"])) if ok else None)
+        errors = measure.image_errors(estimate, true_directions(true))
+        focal = _number(row.get("focal", "")) or (
+            math.sqrt(float(row["fx"]) * float(row["fy"])) if row.get("fx") else None)
+        photos.append(PhotoResult(
+            image, row.get("status", ""), _number(row.get("confidence", "")), focal,
+            row.get("focal_source", ""), float(true["focal_px"]), errors.vertical, errors.wall,
+            row.get("error", "")))
+    return RunResult(name, photos, cpu, wall)
+
+
+def evaluate(data: Path, jobs: int = 1) -> list[RunResult]:
+    """Both runs (calibrated focal; no focal, EXIF removed) over the photos in ``data``."""
+    truth = read_truth(data)
+    with tempfile.TemporaryDirectory(prefix="gsrwt-york-") as temporary:
+        scratch = Path(temporary)
+        sidecar = scratch / "calibrated.csv"
+        with open(sidecar, "w", newline="") as file:
+            writer = csv.writer(file)
+            writer.writerow(["image", "focal", "cx", "cy"])
+            for image, row in truth.items():
+                writer.writerow([image, row["focal_px"], row["cx"], row["cy"]])
+        bare = scratch / "no-exif"
+        bare.mkdir()
+        for image in truth:
+            (bare / image).write_bytes(strip_exif((data / "images" / image).read_bytes()))
+        runs = []
+        for name, images, given in (("calibrated focal", data / "images", sidecar),
+                                    ("no focal (EXIF removed)", bare, None)):
+            rows, cpu, wall = run_estimate(images, given, jobs, scratch / f"{len(runs)}.csv")
+            runs.append(measure_run(name, rows, truth, cpu, wall))
+    return runs
+
+
+@dataclass
+class OtherPhoto:
+    """One photo of ``tests/data/real`` (its row of ``photos.csv``) and what ``gsrwt estimate``
+    (no focal length) and ``gsrwt rectify --auto`` made of it."""
+
+    image: str
+    structure: str
+    expected: str
+    estimate_status: str
+    estimate_confidence: float | None
+    estimate_pose: tuple[float, float, float] | None
+    estimate_focal: float | None
+    true_focal: float | None
+    auto_status: str
+    auto_confidence: float | None
+    auto_pose: tuple[float, float, float] | None
+    error: str
+
+    @property
+    def wrongly_accepted(self) -> tuple[bool, bool]:
+        """(estimate, --auto) gave ``ok`` for a photo that must be refused."""
+        refuse = self.expected == "refuse"
+        return refuse and self.estimate_status == "ok", refuse and self.auto_status == "ok"
+
+
+def _pose(row: dict[str, str], *names: str) -> tuple[float, float, float] | None:
+    return tuple(float(row[name]) for name in names) if row.get("status") == "ok" else None
+
+
+def evaluate_other_photos(folder: Path = OTHER_PHOTOS, jobs: int = 1) -> list[OtherPhoto]:
+    """``gsrwt estimate`` (no focal length: the photos carry no EXIF) and ``gsrwt rectify
+    --auto`` over the photos ``folder/photos.csv`` lists, one subprocess each."""
+    with open(folder / "photos.csv", newline="") as file:
+        manifest = list(csv.DictReader(file))
+    with tempfile.TemporaryDirectory(prefix="gsrwt-real-") as temporary:
+        scratch = Path(temporary)
+        estimates, _, _ = run_estimate(folder, None, jobs, scratch / "estimate.csv")
+        table = scratch / "auto.csv"
+        done = subprocess.run(
+            [str(GSRWT), "rectify", str(folder), "--auto", "-o", str(scratch / "out"),
+             "--table", str(table), "-j", str(jobs), "-q"], capture_output=True, text=True)
+        if done.returncode not in (0, 1) or not table.exists():
+            raise SystemExit(f"gsrwt rectify --auto failed (exit {done.returncode}): "
+                             f"{done.stderr.strip()}")
+        with open(table, newline="") as file:
+            autos = {Path(row["image"]).name: row for row in csv.DictReader(file)}
+    by_image = {Path(row["image"]).name: row for row in estimates}
+    photos = []
+    for entry in manifest:
+        estimate = by_image.get(entry["image"], {"status": "missing"})
+        auto = autos.get(entry["image"], {"status": "missing"})
+        photos.append(OtherPhoto(
+            entry["image"], entry["structure"], entry["expected"], estimate["status"],
+            _number(estimate.get("confidence", "")), _pose(estimate, "pan", "tilt", "roll"),
+            _number(estimate.get("focal", "")), _number(entry.get("focal_px", "")),
+            auto["status"], _number(auto.get("confidence", "")),
+            _pose(auto, "pan_deg", "tilt_deg", "roll_deg"),
+            estimate.get("error", "") or auto.get("error", "")))
+    return photos
+
+
+def report_other_photos(photos: list[OtherPhoto]) -> str:
+    """The table of :func:`evaluate_other_photos`, as text."""
+    must_refuse = [p for p in photos if p.expected == "refuse"]
+    planar = [p for p in photos if p.expected == "right"]
+    lines = [
+        f"other real photos ({OTHER_PHOTOS.relative_to(REPOSITORY)}, no focal length): "
+        f"{len(must_refuse)} must be refused, {len(planar)} have planar structure",
+        f"  must be refused but ok: estimate {sum(p.wrongly_accepted[0] for p in photos)}, "
+        f"--auto {sum(p.wrongly_accepted[1] for p in photos)} of {len(must_refuse)}; "
+        f"planar photos ok: estimate {sum(p.estimate_status == 'ok' for p in planar)}, "
+        f"--auto {sum(p.auto_status == 'ok' for p in planar)} of {len(planar)}",
+        "  photo              expected | estimate: status conf   pan  tilt  roll  focal "
+        "| rectify --auto: status conf   pan  tilt  roll",
+    ]
+    for p in photos:
+        pose = (" ".join(f"{angle:5.1f}" for angle in p.estimate_pose) if p.estimate_pose
+                else " " * 17)
+        auto = " ".join(f"{angle:5.1f}" for angle in p.auto_pose) if p.auto_pose else ""
+        focal = _format(p.estimate_focal, 0) + (f" (true {p.true_focal:.0f})"
+                                                 if p.true_focal else "")
+        lines.append(
+            f"  {p.image:18s} {p.expected:8s} | {p.estimate_status:6s} "
+            f"{_format(p.estimate_confidence):>4s} {pose} {focal:>5s} | {p.auto_status:6s} "
+            f"{_format(p.auto_confidence):>4s} {auto}")
+    return "\n".join(lines)
+
+
+def _format(value: float, digits: int = 2) -> str:
+    return "-" if value is None or math.isnan(value) else f"{value:.{digits}f}"
+
+
+def report(runs: list[RunResult], data: Path, jobs: int) -> str:
+    """The table, as text."""
+    count = len(runs[0].photos)
+    lines = [
+        f"gsrwt estimate on {count} real photos, York Urban DB training half ({data})",
+        f"{datetime.date.today()}, {platform.node()}: {_cpu_name()}, {os.cpu_count()} cores, "
+        f"Python {platform.python_version()}, -j {jobs}",
+        "",
+        "errors in degrees (no estimate = 90)  vertical: median  p90  worst | wall normal: "
+        "median  p90  worst | refused | confidently wrong (ok, > 3 deg) | ms per photo: CPU  "
+        "wall",
+    ]
+    for run in runs:
+        lines.append(
+            f"  {run.name:34s}  {_format(run.vertical.median):>6s} {_format(run.vertical.p90):>5s}"
+            f" {_format(run.vertical.worst):>6s} | {_format(run.wall.median):>6s} "
+            f"{_format(run.wall.p90):>5s} {_format(run.wall.worst):>6s} | "
+            f"{len(run.refused):3d} of {count} | {len(run.confidently_wrong):3d} | "
+            f"{1000 * run.cpu_seconds / count:6.1f} {1000 * run.wall_seconds / count:6.1f}")
+    for run in runs:
+        focal = run.focal_errors()
+        if not math.isnan(focal.median):
+            lines.append(f"focal length error, {run.name} (estimated, ok): median "
+                         f"{focal.median:.1f} %, p90 {focal.p90:.1f} %, worst {focal.worst:.1f} %")
+    lines += ["", "confidence calibration (status ok): per bin, photos and the fraction within "
+              f"{measure.WITHIN_DEG:g} deg on both measures"]
+    lines.append("  confidence   " + "".join(f"| {run.name:<29s} " for run in runs))
+    for bins in zip(*(run.calibration() for run in runs)):
+        low, high = bins[0].low, bins[0].high
+        cells = "".join(
+            f"| n {b.count:3d}, mean {_format(b.mean_confidence):>4s}, within "
+            f"{_format(b.fraction_within):>4s} "
+            for b in bins)
+        lines.append(f"  {low:.1f}-{high:.1f}      {cells}")
+    for run in runs:
+        for label, photos in (("refused", run.refused),
+                              ("confidently wrong", run.confidently_wrong)):
+            for p in photos:
+                lines.append(
+                    f"{run.name}, {label}: {p.image} vertical {p.vertical:.2f}, wall "
+                    f"{p.wall:.2f}, confidence {_format(p.confidence)}, focal "
+                    f"{_format(p.focal, 0)} ({p.focal_source or '-'})"
+                    + (f": {p.error}" if p.error else ""))
+    return "\n".join(lines)
+
+
+def as_json(runs: list[RunResult], data: Path, jobs: int) -> dict:
+    """Everything of :func:`report`, and each photo's row, for machines."""
+    count = len(runs[0].photos)
+    return {
+        "data": str(data), "date": str(datetime.date.today()), "machine": platform.node(),
+        "cpu": _cpu_name(), "cores": os.cpu_count(), "jobs": jobs, "photos": count,
+        "runs": [{
+            "name": run.name,
+            "vertical": run.vertical._asdict(), "wall": run.wall._asdict(),
+            "refused": len(run.refused), "confidently_wrong": len(run.confidently_wrong),
+            "focal_error_percent": run.focal_errors()._asdict(),
+            "cpu_ms_per_photo": 1000 * run.cpu_seconds / count,
+            "wall_ms_per_photo": 1000 * run.wall_seconds / count,
+            "calibration": [b._asdict() for b in run.calibration()],
+            "per_photo": [asdict(p) for p in run.photos],
+        } for run in runs],
+    }
+
+
+def _no_nan(value: object) -> object:
+    """``value`` with every NaN (an empty bin, no estimated focal) as None: JSON has no NaN."""
+    if isinstance(value, float) and math.isnan(value):
+        return None
+    if isinstance(value, dict):
+        return {key: _no_nan(item) for key, item in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_no_nan(item) for item in value]
+    return value
+
+
+def _cpu_name() -> str:
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or "unknown CPU"
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("data", nargs="?", type=Path, default=DEFAULT_DATA,
+                        help="the york-urban-train folder (truth.csv, images/)")
+    parser.add_argument("--json", action="store_true", help="print JSON instead of the table")
+    parser.add_argument("--jobs", type=int, default=1, help="gsrwt estimate's -j (default 1)")
+    arguments = parser.parse_args()
+    data = arguments.data
+    if not (data / "truth.csv").is_file() or not (data / "images").is_dir():
+        parser.exit(2, f"bench_real_photos: no York Urban data at {data} (needs truth.csv and "
+                       "images/); give its path as the first argument\n")
+    runs = evaluate(data, arguments.jobs)
+    others = evaluate_other_photos(OTHER_PHOTOS, arguments.jobs)
+    if arguments.json:
+        result = as_json(runs, data, arguments.jobs)
+        result["other_photos"] = [asdict(p) for p in others]
+        print(json.dumps(_no_nan(result), indent=1, allow_nan=False))
+    else:
+        print(report(runs, data, arguments.jobs))
+        print()
+        print(report_other_photos(others))
+
+
+if __name__ == "__main__":
+    main()
