@@ -1,6 +1,7 @@
 """The lens reached from the camera: :class:`Intrinsics` rays and pixels include the lens,
 checked against OpenCV's own projection (``cv2.projectPoints``, ``cv2.fisheye.projectPoints``)
-of the same rays, an implementation the package does not share for this direction of use."""
+of the same rays, an implementation the package does not share for this direction of use;
+and where each lens model folds back, from its formula worked by hand."""
 
 from __future__ import annotations
 
@@ -11,7 +12,7 @@ import numpy as np
 import pytest
 
 from gsrwt_cli.geometry.camera import Intrinsics
-from gsrwt_cli.geometry.lens import Lens
+from gsrwt_cli.geometry.lens import Lens, LensDistortion, monotonic_radius
 
 WIDTH, HEIGHT = 640, 480
 FX, FY, CX, CY = 520.0, 515.0, 322.5, 236.0
@@ -87,3 +88,36 @@ def test_pixels_beyond_the_lens_fold_have_no_ray() -> None:
     corner = np.array([[0.0, 0.0]])  # r_d = 1.33 there; the lens reaches at most 0.54
     assert np.isnan(camera.rays_from_pixels(corner)).any()
     assert np.all(np.isfinite(camera.rays_from_pixels(np.array([[CX + 50, CY + 40]]))))
+
+
+@pytest.mark.parametrize(("coefficients", "fisheye", "radius"), [
+    # r_d = r (1 + k1 r^2): d r_d / dr = 1 + 3 k1 r^2 = 0 at r^2 = -1 / (3 k1).
+    ((-0.3, 0.0, 0.0, 0.0, 0.0), False, 1 / math.sqrt(0.9)),
+    # r_d = r / (1 + k4 r^2): d r_d / dr has the sign of 1 - k4 r^2.
+    ((0.0, 0.0, 0.0, 0.0, 0.0, 0.25, 0.0, 0.0), False, 2.0),
+    # r_d = theta (1 + k1 theta^2): zero slope at theta^2 = -1 / (3 k1), r = tan theta.
+    ((-0.2, 0.0, 0.0, 0.0), True, math.tan(math.sqrt(1 / 0.6))),
+    # r_d grows with r everywhere: no fold.
+    ((0.1, 0.01, 0.0, 0.0, 0.0), False, math.inf),
+])
+def test_the_radius_where_a_lens_folds_back_is_its_formulas(coefficients, fisheye, radius):
+    assert monotonic_radius(coefficients, fisheye) == pytest.approx(radius, rel=1e-9)
+
+
+def test_nothing_beyond_the_fold_is_distorted_or_undistorted():
+    """Ideal pixels beyond the fold have no pixel of their own (NaN), those within do; a
+    pixel of the image that only rays beyond the fold reach has no ideal pixel."""
+    k = ((300.0, 0.0, 320.0), (0.0, 300.0, 240.0), (0.0, 0.0, 1.0))
+    lens = LensDistortion(k, (-0.3, 0.0, 0.0, 0.0, 0.0))
+    limit_px = 300.0 / math.sqrt(0.9)
+    assert lens.limit_px == pytest.approx(limit_px)
+    ideal = np.array([[320.0 + 0.99 * limit_px, 240.0], [320.0 + 1.01 * limit_px, 240.0]])
+    distorted = lens.distort(ideal)
+    assert np.isfinite(distorted[0]).all() and np.isnan(distorted[1]).all()
+    # The largest radius the model reaches: r (1 - 0.3 r^2) at its fold, in pixels.
+    r = 1 / math.sqrt(0.9)
+    reach_px = 300.0 * r * (1 - 0.3 * r * r)
+    pixels = np.array([[320.0 + 0.98 * reach_px, 240.0], [320.0 + 1.05 * reach_px, 240.0]])
+    undistorted = lens.undistort(pixels)
+    assert np.isfinite(undistorted[0]).all() and np.isnan(undistorted[1]).all()
+    np.testing.assert_allclose(lens.distort(undistorted[:1]), pixels[:1], atol=1e-6)

@@ -14,7 +14,14 @@ from pathlib import Path
 import pytest
 
 from gsrwt_cli.batch.rectify_jobs import RECTIFY_COLUMNS
-from gsrwt_cli.tables.shards import MAX_SHARDS, order_shards, shard_slice
+from gsrwt_cli.tables.shards import (
+    MAX_SHARDS,
+    order_shards,
+    parse_shard,
+    shard_of_name,
+    shard_slice,
+    shard_table_name,
+)
 from tests.helpers.cli import run_gsrwt
 from tests.helpers.faults import sha256_tree
 from tests.helpers.paths import SAMPLE_VIEWS as SAMPLES
@@ -276,3 +283,13 @@ def test_merge_refuses_a_json_nan(tmp_path, shard_tables):
     assert result.returncode == 2
     assert result.stderr.strip() == (f"Error: {tmp_path / 't.jsonl'} row 1, column scale: "
                                      "expected a number, got NaN")
+
+
+def test_a_shards_table_is_named_by_its_k_and_n():
+    name = shard_table_name("out/gsrwt.csv", 3, 8)
+    assert name == "out/gsrwt.3-of-8.csv" and shard_of_name(name) == (3, 8)
+    assert shard_of_name("out/gsrwt.csv") is None
+    assert parse_shard("2/8") == (2, 8)
+    for text in ("0/8", "9/8", "2 /8", "2/8/1", "-1/8"):
+        with pytest.raises(ValueError):
+            parse_shard(text)
