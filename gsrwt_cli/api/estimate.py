@@ -26,6 +26,7 @@ pixel centres at integers. docs/CONVENTIONS.md ("What the estimator reports") ha
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import cv2
@@ -69,6 +70,19 @@ FOCAL_RANGE = (0.2, 10.0)
 FINITE_VP_DIAGONALS = 8.0
 #: Support (inlier segments) of a direction at which its part of the confidence is 1 - 1/e.
 CONFIDENCE_SEGMENTS = 8.0
+#: The null model of :func:`structure_ratio`: this many random orthogonal frames (seeded).
+RANDOM_FRAMES = 256
+#: A frame must explain this many times the segment length a random frame does (median),
+#: else the image has no man-made structure to tell a pose by (:func:`structure_ratio`).
+MIN_STRUCTURE_RATIO = 4.5
+#: The Laplace approximation of an estimated focal length's spread (:func:`focal_uncertainty`)
+#: treats the segments as independent; on the York Urban training photos the focal lengths
+#: are this many times further off than it says (median of |log error| / sigma, over the
+#: 0.674 of a normal distribution), so it is scaled by it.
+FOCAL_SIGMA_SCALE = 4.7
+#: An estimated focal length is refused when moving it by one standard deviation turns the
+#: vertical or the wall by more than this many degrees (a pose this far off is wrong).
+MAX_FOCAL_DEGREES = 3.0
 
 #: Which vertical plane is the wall (:func:`world_from_camera_of`).
 WALL_CHOICES = ("frontal", "dominant")
@@ -105,6 +119,8 @@ class PoseEstimate:
     lines: np.ndarray = field(default_factory=lambda: np.zeros((0, 4)), repr=False)
     labels: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int), repr=False)
     error: str | None = None
+    structure: float = 0.0
+    focal_uncertainty: FocalUncertainty | None = None
 
     @property
     def ok(self) -> bool:
@@ -261,6 +277,36 @@ def _labels(normals: np.ndarray, half: np.ndarray, directions: np.ndarray,
     return np.where(nearest < 1.0, labels, -1), score
 
 
+def _random_frames(count: int, seed: int = 0) -> np.ndarray:
+    """``count`` rotations ``(count, 3, 3)`` uniform over SO(3) (unit quaternions from a
+    seeded normal distribution)."""
+    q = _unit(np.random.default_rng(seed).normal(size=(count, 4)))
+    w, x, y, z = q.T
+    return np.stack([
+        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], axis=1),
+        np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], axis=1),
+        np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], axis=1),
+    ], axis=1)
+
+
+_NULL_FRAMES = _random_frames(RANDOM_FRAMES)
+
+
+def structure_ratio(normals: np.ndarray, half: np.ndarray, directions: np.ndarray,
+                    inlier_px: float) -> float:
+    """How much better the frame ``directions`` explains the segments than chance: its score
+    (:func:`_scores`) over the median score of :data:`RANDOM_FRAMES` random orthogonal frames.
+
+    A null model: any three orthogonal directions catch some segments, the more the shorter
+    and more numerous they are (fur, leaves, gravel, fruit give hundreds of short, curved
+    pieces). A man-made scene's frame catches its long straight edges: 4.4 to 18 times a random
+    frame's share on the York Urban training photos; photos with no such structure 1.4 to 3.8.
+    """
+    frames = np.concatenate([directions[None], _NULL_FRAMES])
+    scores = _scores(normals, half, frames, inlier_px)
+    return float(scores[0] / max(np.median(scores[1:]), 1e-12))
+
+
 def _refine(normals: np.ndarray, half: np.ndarray, directions: np.ndarray,
             inlier_px: float, iterations: int = 8,
             fixed_labels: np.ndarray | None = None) -> np.ndarray:
@@ -327,6 +373,33 @@ def image_score(lines: np.ndarray, pixel_from_camera: np.ndarray, directions: np
     return float((lengths * np.maximum(0.0, 1.0 - (best / inlier_px) ** 2)).sum())
 
 
+def _focal_cost(ideal: np.ndarray, centre: np.ndarray, focal: float, inlier_px: float
+                ) -> tuple[ManhattanFrame, Callable[[float], tuple[float, np.ndarray]]] | None:
+    """The frame fitted at ``focal`` and the cost of its segments as a function of the log
+    focal length: the refined frame's Cauchy cost (:func:`_image_cost`, the segments'
+    negative log-likelihood under Cauchy noise) with the inliers held fixed, and the refined
+    directions. None when fewer than two directions are found."""
+    def planes(f: float) -> tuple[np.ndarray, np.ndarray]:
+        camera = Intrinsics(f, f, centre[0], centre[1])
+        return interpretation_planes(ideal, _camera_from_pixel(camera))
+
+    normals, half = planes(focal)
+    frame = fit_manhattan_frame(normals, half, inlier_px)
+    if (frame.support() >= MIN_DIRECTION_SEGMENTS).sum() < 2:
+        return None
+    start = frame.directions
+
+    def cost(log_focal: float) -> tuple[float, np.ndarray]:
+        f = math.exp(log_focal)
+        normals_f, half_f = planes(f)
+        directions = _refine(normals_f, half_f, start, inlier_px, 4, frame.labels)
+        pixel_from_camera = np.linalg.inv(_camera_from_pixel(Intrinsics(f, f, *centre)))
+        return (_image_cost(ideal, pixel_from_camera, directions, frame.labels, inlier_px),
+                directions)
+
+    return frame, cost
+
+
 def polish_focal(ideal: np.ndarray, centre: np.ndarray, focal: float, inlier_px: float,
                  span: float = 1.4, iterations: int = 14) -> float:
     """The focal length within ``span`` times ``focal`` at which the segments fit a Manhattan
@@ -335,22 +408,12 @@ def polish_focal(ideal: np.ndarray, centre: np.ndarray, focal: float, inlier_px:
     The vanishing-point formula (:func:`focal_from_vanishing_points`) uses two clusters; this
     weighs every segment of all three, which matters when one vanishing point is far away.
     """
-    def planes(f: float) -> tuple[np.ndarray, np.ndarray]:
-        camera = Intrinsics(f, f, centre[0], centre[1])
-        return interpretation_planes(ideal, _camera_from_pixel(camera))
-
-    normals, half = planes(focal)
-    frame = fit_manhattan_frame(normals, half, inlier_px)
-    if (frame.support() >= MIN_DIRECTION_SEGMENTS).sum() < 2:
+    fitted = _focal_cost(ideal, centre, focal, inlier_px)
+    if fitted is None:
         return focal
-    start = frame.directions
 
     def cost(log_focal: float) -> float:
-        f = math.exp(log_focal)
-        normals_f, half_f = planes(f)
-        directions = _refine(normals_f, half_f, start, inlier_px, 4, frame.labels)
-        pixel_from_camera = np.linalg.inv(_camera_from_pixel(Intrinsics(f, f, *centre)))
-        return _image_cost(ideal, pixel_from_camera, directions, frame.labels, inlier_px)
+        return fitted[1](log_focal)[0]
 
     low, high = math.log(focal / span), math.log(focal * span)
     ratio = (math.sqrt(5.0) - 1.0) / 2.0
@@ -366,6 +429,42 @@ def polish_focal(ideal: np.ndarray, centre: np.ndarray, focal: float, inlier_px:
             b = low + ratio * (high - low)
             cost_b = cost(b)
     return math.exp((low + high) / 2.0)
+
+
+@dataclass(frozen=True)
+class FocalUncertainty:
+    """How well an image tells its focal length: ``sigma`` the standard deviation of the log
+    focal length (a Laplace approximation: the curvature of the segments' Cauchy negative
+    log-likelihood, :func:`_focal_cost`, times :data:`FOCAL_SIGMA_SCALE`), and ``degrees`` how
+    far the vertical or the wall's normal turns when the focal length moves by ``sigma``
+    either way (the frame refitted, its inliers kept)."""
+
+    sigma: float
+    degrees: float
+
+
+def focal_uncertainty(ideal: np.ndarray, centre: np.ndarray, focal: float, inlier_px: float,
+                      step: float = 0.05) -> FocalUncertainty:
+    """The uncertainty of an estimated focal length and what it does to the pose
+    (:class:`FocalUncertainty`); infinite when the cost does not curve up around ``focal``."""
+    fitted = _focal_cost(ideal, centre, focal, inlier_px)
+    if fitted is None:
+        return FocalUncertainty(math.inf, math.inf)
+    cost = fitted[1]
+    log_focal = math.log(focal)
+    (low, _), (middle, at), (high, _) = (cost(log_focal + d) for d in (-step, 0.0, step))
+    curvature = (low + high - 2.0 * middle) / step**2
+    if not curvature > 0:
+        return FocalUncertainty(math.inf, math.inf)
+    sigma = FOCAL_SIGMA_SCALE / math.sqrt(curvature)
+    reference, order = world_from_camera_of(at)
+    degrees = 0.0
+    for sign in (-1.0, 1.0):
+        moved = _rotation_of(cost(log_focal + sign * sigma)[1], *order)
+        for row in (0, 2):  # the vertical and the wall's normal, as lines
+            cosine = min(1.0, abs(float(reference[row] @ moved[row])))
+            degrees = max(degrees, math.degrees(math.acos(cosine)))
+    return FocalUncertainty(sigma, degrees)
 
 
 # --------------------------------------------------------------------------------------------
@@ -467,11 +566,13 @@ def _camera_from_pixel(intrinsics: Intrinsics) -> np.ndarray:
 
 def _failure(reason: str, lines: np.ndarray, segments: int, directions: int = 0,
              focal: float | None = None, estimated: bool = False,
-             labels: np.ndarray | None = None) -> PoseEstimate:
+             labels: np.ndarray | None = None, structure: float = 0.0,
+             uncertainty: FocalUncertainty | None = None) -> PoseEstimate:
     return PoseEstimate(
         None, focal, estimated, 0.0, segments, 0 if labels is None else int((labels >= 0).sum()),
         directions, lines=lines,
-        labels=-np.ones(len(lines), dtype=int) if labels is None else labels, error=reason)
+        labels=-np.ones(len(lines), dtype=int) if labels is None else labels, error=reason,
+        structure=structure, focal_uncertainty=uncertainty)
 
 
 def estimate_pose(
@@ -528,8 +629,10 @@ def estimate_pose(
             "cannot tell the focal length: no two finite vanishing points of orthogonal "
             f"directions ({segments} segments); give the focal length", detected, segments,
             estimated=True)
+    uncertainty = focal_uncertainty(ideal, centre, focal, inlier_px)
     trial = Intrinsics(focal, focal, centre[0], centre[1], width=width, height=height)
-    return _estimate_known_focal(detected, ideal, trial, inlier_px, segments, True, wall)
+    return _estimate_known_focal(detected, ideal, trial, inlier_px, segments, True, wall,
+                                 uncertainty)
 
 
 def _focal_of(ideal: np.ndarray, centre: np.ndarray, diagonal: float, side: float,
@@ -565,18 +668,42 @@ def _focal_of(ideal: np.ndarray, centre: np.ndarray, diagonal: float, side: floa
     return focal
 
 
+def _refusal(structure: float, uncertainty: FocalUncertainty | None) -> str | None:
+    """Why a frame cannot be trusted, in words a user understands, or None."""
+    if structure < MIN_STRUCTURE_RATIO:
+        return (f"no clear man-made structure: the straight segments fit three orthogonal "
+                f"directions only {structure:.1f} times as well as random ones do "
+                f"(need {MIN_STRUCTURE_RATIO:g})")
+    if uncertainty is not None and not uncertainty.degrees <= MAX_FOCAL_DEGREES:
+        if math.isinf(uncertainty.sigma):
+            return ("focal length not determinable from this view: the segments do not pin "
+                    "it down; give the focal length")
+        return (f"focal length not determinable from this view: +-"
+                f"{100 * math.expm1(uncertainty.sigma):.0f} % turns the pose by "
+                f"{uncertainty.degrees:.1f} deg; give the focal length")
+    return None
+
+
 def _estimate_known_focal(detected: np.ndarray, ideal: np.ndarray, camera: Intrinsics,
                           inlier_px: float, segments: int, estimated: bool,
-                          wall: str) -> PoseEstimate:
-    """The frame, wall and pose with a known camera (:func:`estimate_pose`'s main path)."""
+                          wall: str, uncertainty: FocalUncertainty | None = None
+                          ) -> PoseEstimate:
+    """The frame, wall and pose with a known camera (:func:`estimate_pose`'s main path);
+    ``uncertainty``: the estimated focal length's (None when given)."""
     normals, half = interpretation_planes(ideal, _camera_from_pixel(camera))
     frame = fit_manhattan_frame(normals, half, inlier_px)
     support = frame.support()
     needed = max(MIN_DIRECTION_SEGMENTS, math.ceil(MIN_DIRECTION_FRACTION * segments))
     found = int((support >= needed).sum())
+    structure = structure_ratio(normals, half, frame.directions, inlier_px)
     if found < 2:
         return _failure(f"only {found} of 3 directions found, {segments} segments", detected,
-                        segments, found, camera.focal, estimated, frame.labels)
+                        segments, found, camera.focal, estimated, frame.labels, structure,
+                        uncertainty)
+    refusal = _refusal(structure, uncertainty)
+    if refusal is not None:
+        return _failure(refusal, detected, segments, found, camera.focal, estimated,
+                        frame.labels, structure, uncertainty)
     try:
         lengths = np.bincount(frame.labels[frame.labels >= 0],
                               weights=half[frame.labels >= 0], minlength=3)
@@ -598,5 +725,5 @@ def _estimate_known_focal(detected: np.ndarray, ideal: np.ndarray, camera: Intri
     return PoseEstimate(
         pose, camera.focal, estimated, confidence_of(frame, half), segments,
         int((frame.labels >= 0).sum()), found, tuple(points), world_from_camera, detected,
-        relabel,
+        relabel, structure=structure, focal_uncertainty=uncertainty,
     )
