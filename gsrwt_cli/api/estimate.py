@@ -50,6 +50,8 @@ CAUCHY_FRACTION = 0.25
 #: Hypotheses of the minimal-sample search, and the segments they are drawn from (the longest).
 HYPOTHESES = 600
 SAMPLED_SEGMENTS = 120
+#: A hypothesis with an axis this many degrees from all of the frame's is a rival frame.
+RIVAL_DEGREES = 5.0
 #: Segments (the longest) that score the hypotheses; all of them are refined.
 SCORED_SEGMENTS = 200
 #: At most this many segments (the longest) are fitted.
@@ -68,8 +70,12 @@ FOCAL_RANGE = (0.2, 10.0)
 #: Vanishing points further than this many diagonals from the principal point are
 #: "at infinity" for the focal length formula.
 FINITE_VP_DIAGONALS = 8.0
-#: Support (inlier segments) of a direction at which its part of the confidence is 1 - 1/e.
-CONFIDENCE_SEGMENTS = 8.0
+#: Weights of :func:`confidence_of` (intercept, rival, focal degrees), fitted by
+#: ``benchmarks/calibrate_confidence.py`` on the York Urban training photos.
+CONFIDENCE_WEIGHTS = (12.913, -12.719, -0.521)
+#: ``gsrwt estimate`` and ``rectify --auto`` refuse estimates less confident than this: more
+#: likely more than 2 degrees off than not.
+DEFAULT_MIN_CONFIDENCE = 0.5
 #: The null model of :func:`structure_ratio`: this many random orthogonal frames (seeded).
 RANDOM_FRAMES = 256
 #: A frame must explain this many times the segment length a random frame does (median),
@@ -121,6 +127,7 @@ class PoseEstimate:
     error: str | None = None
     structure: float = 0.0
     focal_uncertainty: FocalUncertainty | None = None
+    rival: float = 0.0
 
     @property
     def ok(self) -> bool:
@@ -201,11 +208,14 @@ def _rodrigues(omega: np.ndarray) -> np.ndarray:
 @dataclass(frozen=True)
 class ManhattanFrame:
     """Three orthonormal directions (the columns of ``directions``, camera frame) and the
-    segments that meet in each (``labels``: 0, 1, 2, or -1)."""
+    segments that meet in each (``labels``: 0, 1, 2, or -1). ``rival``: the best score of the
+    hypotheses with an axis more than :data:`RIVAL_DEGREES` from all of the frame's, over the
+    best hypothesis's score (near 1: another frame explains the segments about as well)."""
 
     directions: np.ndarray
     labels: np.ndarray
     score: float
+    rival: float = 0.0
 
     def support(self) -> np.ndarray:
         return np.bincount(self.labels[self.labels >= 0], minlength=3)
@@ -246,7 +256,11 @@ def fit_manhattan_frame(
     best = candidates[int(np.argmax(scores))]
     directions = _refine(normals, half_lengths, best, inlier_px)
     labels, score = _labels(normals, half_lengths, directions, inlier_px)
-    return ManhattanFrame(directions, labels, score)
+    # each candidate's axis furthest from all of the frame's axes, as the cosine of the angle
+    nearest = np.abs(np.einsum("ji,hjk->hik", directions, candidates)).max(axis=2).min(axis=1)
+    other = nearest < math.cos(math.radians(RIVAL_DEGREES))
+    rival = float(scores[other].max() / scores.max()) if other.any() and scores.max() > 0 else 0.0
+    return ManhattanFrame(directions, labels, score, rival)
 
 
 def _scores(normals: np.ndarray, half: np.ndarray, candidates: np.ndarray,
@@ -547,15 +561,20 @@ def _rotation_of(directions: np.ndarray, vertical: int, along: int, normal: int)
     return u @ vt
 
 
-def confidence_of(frame: ManhattanFrame, half_lengths: np.ndarray) -> float:
-    """How much the image says for its frame, 0 to 1: the fraction of the segments' length
-    that meets in the frame, times ``1 - exp(-n / 8)`` for each of its two best-supported
-    directions (``n`` their segments). A wall with a dozen vertical and a dozen horizontal
-    edges and little else scores about 0.8; a few stray segments score near 0."""
-    inlier_fraction = float(half_lengths[frame.labels >= 0].sum() / half_lengths.sum())
-    support = np.sort(frame.support())[::-1]
-    factor = np.prod(1.0 - np.exp(-support[:2] / CONFIDENCE_SEGMENTS))
-    return float(np.clip(inlier_fraction * factor, 0.0, 1.0))
+def confidence_of(rival: float, focal_degrees: float = 0.0) -> float:
+    """The probability that the pose is within 2 degrees of the truth (vertical and wall
+    normal): ``1 / (1 + exp(-(w0 + w1 * rival + w2 * focal_degrees)))`` with the weights
+    :data:`CONFIDENCE_WEIGHTS` fitted on real photos (``benchmarks/calibrate_confidence.py``).
+    ``rival``: :attr:`ManhattanFrame.rival`; ``focal_degrees``: how far an estimated focal
+    length's standard deviation turns the pose (:class:`FocalUncertainty`; 0 when given)."""
+    w0, w1, w2 = CONFIDENCE_WEIGHTS
+    return float(1.0 / (1.0 + math.exp(-(w0 + w1 * rival + w2 * focal_degrees))))
+
+
+def confidence_features(estimate: PoseEstimate) -> np.ndarray:
+    """What :func:`confidence_of` weighs, of an estimate: ``rival``, ``focal_degrees``."""
+    uncertainty = estimate.focal_uncertainty
+    return np.array([estimate.rival, 0.0 if uncertainty is None else uncertainty.degrees])
 
 
 def _camera_from_pixel(intrinsics: Intrinsics) -> np.ndarray:
@@ -723,7 +742,8 @@ def _estimate_known_focal(detected: np.ndarray, ideal: np.ndarray, camera: Intri
         else:
             points.append((float(point[0] / point[2]), float(point[1] / point[2])))
     return PoseEstimate(
-        pose, camera.focal, estimated, confidence_of(frame, half), segments,
+        pose, camera.focal, estimated,
+        confidence_of(frame.rival, 0.0 if uncertainty is None else uncertainty.degrees), segments,
         int((frame.labels >= 0).sum()), found, tuple(points), world_from_camera, detected,
-        relabel, structure=structure, focal_uncertainty=uncertainty,
+        relabel, structure=structure, focal_uncertainty=uncertainty, rival=frame.rival,
     )
