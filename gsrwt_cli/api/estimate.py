@@ -72,7 +72,7 @@ FOCAL_RANGE = (0.2, 10.0)
 FINITE_VP_DIAGONALS = 8.0
 #: Weights of :func:`confidence_of` (intercept, rival, focal degrees), fitted by
 #: ``benchmarks/calibrate_confidence.py`` on the York Urban training photos.
-CONFIDENCE_WEIGHTS = (12.913, -12.719, -0.521)
+CONFIDENCE_WEIGHTS = (11.693, -11.320, -0.539)
 #: ``gsrwt estimate`` and ``rectify --auto`` refuse estimates less confident than this: more
 #: likely more than 2 degrees off than not.
 DEFAULT_MIN_CONFIDENCE = 0.5
@@ -209,8 +209,9 @@ def _rodrigues(omega: np.ndarray) -> np.ndarray:
 class ManhattanFrame:
     """Three orthonormal directions (the columns of ``directions``, camera frame) and the
     segments that meet in each (``labels``: 0, 1, 2, or -1). ``rival``: the best score of the
-    hypotheses with an axis more than :data:`RIVAL_DEGREES` from all of the frame's, over the
-    best hypothesis's score (near 1: another frame explains the segments about as well)."""
+    hypotheses with an axis more than :data:`RIVAL_DEGREES` from all of the best
+    hypothesis's, over its score (near 1: another frame explains the segments about as well).
+    """
 
     directions: np.ndarray
     labels: np.ndarray
@@ -256,8 +257,8 @@ def fit_manhattan_frame(
     best = candidates[int(np.argmax(scores))]
     directions = _refine(normals, half_lengths, best, inlier_px)
     labels, score = _labels(normals, half_lengths, directions, inlier_px)
-    # each candidate's axis furthest from all of the frame's axes, as the cosine of the angle
-    nearest = np.abs(np.einsum("ji,hjk->hik", directions, candidates)).max(axis=2).min(axis=1)
+    # each candidate's axis furthest from all of the best one's, as the cosine of the angle
+    nearest = np.abs(np.einsum("ji,hjk->hik", best, candidates)).max(axis=2).min(axis=1)
     other = nearest < math.cos(math.radians(RIVAL_DEGREES))
     rival = float(scores[other].max() / scores.max()) if other.any() and scores.max() > 0 else 0.0
     return ManhattanFrame(directions, labels, score, rival)
