@@ -52,6 +52,14 @@ HYPOTHESES = 600
 SAMPLED_SEGMENTS = 120
 #: A hypothesis with an axis this many degrees from all of the frame's is a rival frame.
 RIVAL_DEGREES = 5.0
+#: The best distinct hypotheses refined and compared (:func:`_most_upright_of_the_best`); a
+#: score less than this many standard errors (of :data:`BOOTSTRAPS` resamples) below the
+#: best one's is a tie, broken by the vertical nearest the image's.
+TOP_FRAMES = 4
+TIE_SIGMAS = 1.0
+BOOTSTRAPS = 200
+#: Tied frames whose verticals are this close are told apart by their score, not uprightness.
+SAME_VERTICAL_DEGREES = 1.0
 #: Segments (the longest) that score the hypotheses; all of them are refined.
 SCORED_SEGMENTS = 200
 #: At most this many segments (the longest) are fitted.
@@ -72,7 +80,7 @@ FOCAL_RANGE = (0.2, 10.0)
 FINITE_VP_DIAGONALS = 8.0
 #: Weights of :func:`confidence_of` (intercept, rival, focal degrees), fitted by
 #: ``benchmarks/calibrate_confidence.py`` on the York Urban training photos.
-CONFIDENCE_WEIGHTS = (11.693, -11.320, -0.539)
+CONFIDENCE_WEIGHTS = (11.287, -10.699, -0.824)
 #: ``gsrwt estimate`` and ``rectify --auto`` refuse estimates less confident than this: more
 #: likely more than 2 degrees off than not.
 DEFAULT_MIN_CONFIDENCE = 0.5
@@ -224,7 +232,7 @@ class ManhattanFrame:
 
 def fit_manhattan_frame(
     normals: np.ndarray, half_lengths: np.ndarray, inlier_px: float = INLIER_PX,
-    hypotheses: int = HYPOTHESES, seed: int = 0,
+    hypotheses: int = HYPOTHESES, seed: int = 0, upright: bool = True,
 ) -> ManhattanFrame:
     """The three orthogonal directions that most segments meet in (a Manhattan frame).
 
@@ -239,7 +247,9 @@ def fit_manhattan_frame(
     answer): ``v1 = n_i x n_j``, ``v2 = v1 x n_k``, ``v3 = v1 x v2``, scores each by
     ``sum(length * max(0, 1 - (d / inlier_px)^2))`` over the segments' best direction, then
     refines the best rotation by Gauss-Newton with Cauchy weights over the inliers,
-    re-assigning them as it goes.
+    re-assigning them as it goes. With ``upright``, the best few distinct hypotheses are
+    refined and, of those the segments do not significantly prefer one to another, the most
+    upright is chosen (:func:`_most_upright_of_the_best`).
     """
     count = len(normals)
     rng = np.random.default_rng(seed)
@@ -255,13 +265,68 @@ def fit_manhattan_frame(
         return ManhattanFrame(np.eye(3), -np.ones(count, dtype=int), 0.0)
     scores = _scores(normals, half_lengths, candidates, inlier_px)
     best = candidates[int(np.argmax(scores))]
-    directions = _refine(normals, half_lengths, best, inlier_px)
-    labels, score = _labels(normals, half_lengths, directions, inlier_px)
     # each candidate's axis furthest from all of the best one's, as the cosine of the angle
     nearest = np.abs(np.einsum("ji,hjk->hik", best, candidates)).max(axis=2).min(axis=1)
     other = nearest < math.cos(math.radians(RIVAL_DEGREES))
     rival = float(scores[other].max() / scores.max()) if other.any() and scores.max() > 0 else 0.0
+    if upright:
+        directions = _most_upright_of_the_best(normals, half_lengths, candidates, scores,
+                                               inlier_px)
+    else:
+        directions = _refine(normals, half_lengths, best, inlier_px)
+    labels, score = _labels(normals, half_lengths, directions, inlier_px)
     return ManhattanFrame(directions, labels, score, rival)
+
+
+def _distinct_best(candidates: np.ndarray, scores: np.ndarray, count: int) -> list[int]:
+    """Indices of the best-scoring ``count`` candidates each with an axis more than
+    :data:`RIVAL_DEGREES` from all the axes of every better one (among the best 200)."""
+    chosen: list[int] = []
+    limit = math.cos(math.radians(RIVAL_DEGREES))
+    for index in np.argsort(-scores, kind="stable")[:200]:
+        if all(np.abs(candidates[j].T @ candidates[index]).max(axis=1).min() < limit
+               for j in chosen):
+            chosen.append(int(index))
+            if len(chosen) == count:
+                break
+    return chosen
+
+
+_BOOTSTRAP_WEIGHTS = np.random.default_rng(0).poisson(
+    1.0, (BOOTSTRAPS, MAX_SEGMENTS)).astype(np.float32)
+
+
+def _most_upright_of_the_best(normals: np.ndarray, half: np.ndarray, candidates: np.ndarray,
+                              scores: np.ndarray, inlier_px: float) -> np.ndarray:
+    """The frame chosen among the best distinct hypotheses (:data:`TOP_FRAMES`), each refined:
+    of those whose score is not significantly below the best one's (by less than
+    :data:`TIE_SIGMAS` standard errors of the difference, from :data:`BOOTSTRAPS` Poisson
+    bootstrap resamples of the segments), the one whose vertical is nearest the image's
+    vertical (the one-standard-error rule of model selection, with "most upright" for
+    "simplest"). A photo is usually taken about level: when clutter (branches, kerbs) offers a
+    frame about as good as the building's, the more upright is the building's; a frame the
+    segments clearly prefer wins however tilted."""
+    frames = [_refine(normals, half, candidates[k], inlier_px)
+              for k in _distinct_best(candidates, scores, TOP_FRAMES)]
+    if len(frames) == 1:
+        return frames[0]
+    distance = np.abs(np.einsum("ij,kjl->kil", normals, np.stack(frames)))  # (K, N, 3)
+    distance = distance.min(axis=2) * (half / inlier_px)
+    share = half * np.maximum(0.0, 1.0 - distance**2)  # (K, N): each segment's score
+    totals = share.sum(axis=1)
+    best = int(np.argmax(totals))
+    weights = (_BOOTSTRAP_WEIGHTS if len(half) <= MAX_SEGMENTS else np.random.default_rng(0)
+               .poisson(1.0, (BOOTSTRAPS, len(half))).astype(np.float32))
+    resampled = weights[:, :len(half)] @ share.T.astype(np.float32)
+    difference = resampled[:, best:best + 1] - resampled  # (B, K)
+    error = difference.std(axis=0)
+    tied = totals[best] - totals <= TIE_SIGMAS * error
+    verticals = np.stack([frame[:, np.argmax(np.abs(frame[0]))] for frame in frames])
+    most_upright = int(np.argmax(np.where(tied, np.abs(verticals[:, 0]), -1.0)))
+    # of the tied frames with (about) that vertical, the first (the best hypothesis)
+    same = tied & (np.abs(verticals @ verticals[most_upright])
+                   > math.cos(math.radians(SAME_VERTICAL_DEGREES)))
+    return frames[int(np.argmax(same))]
 
 
 def _scores(normals: np.ndarray, half: np.ndarray, candidates: np.ndarray,
@@ -328,13 +393,14 @@ def _refine(normals: np.ndarray, half: np.ndarray, directions: np.ndarray,
     """Gauss-Newton on the rotation: residual ``half * n.v_k`` (about the end-point distance
     in pixels) of each inlier, Cauchy-weighted, the rotation updated as ``exp([w]x) R``.
     Inliers are re-assigned each iteration, unless ``fixed_labels`` gives them."""
-    directions = np.linalg.svd(directions)[0] @ np.linalg.svd(directions)[2]
+    left, _, right = np.linalg.svd(directions)
+    directions = left @ right
     for iteration in range(iterations):
         if fixed_labels is None:
             gate = inlier_px * (2.0 if iteration < 2 else 1.0)
             distance = np.abs(normals @ directions) * half[:, None]
             labels = np.argmin(distance, axis=1)
-            inliers = distance[np.arange(len(labels)), labels] < gate
+            inliers = distance.min(axis=1) < gate
         else:
             labels, inliers = np.maximum(fixed_labels, 0), fixed_labels >= 0
         if inliers.sum() < 3:
@@ -342,7 +408,9 @@ def _refine(normals: np.ndarray, half: np.ndarray, directions: np.ndarray,
         n, k, s = normals[inliers], labels[inliers], half[inliers]
         v = directions[:, k].T  # (M, 3)
         residual = s * np.einsum("ij,ij->i", n, v)
-        jacobian = s[:, None] * np.cross(v, n)
+        jacobian = s[:, None] * np.column_stack([  # v x n, without np.cross's overhead
+            v[:, 1] * n[:, 2] - v[:, 2] * n[:, 1], v[:, 2] * n[:, 0] - v[:, 0] * n[:, 2],
+            v[:, 0] * n[:, 1] - v[:, 1] * n[:, 0]])
         weight = 1.0 / (1.0 + (residual / (CAUCHY_FRACTION * inlier_px)) ** 2)
         normal_matrix = (jacobian * weight[:, None]).T @ jacobian
         damping = 1e-6 * np.trace(normal_matrix) + 1e-12
@@ -399,7 +467,7 @@ def _focal_cost(ideal: np.ndarray, centre: np.ndarray, focal: float, inlier_px: 
         return interpretation_planes(ideal, _camera_from_pixel(camera))
 
     normals, half = planes(focal)
-    frame = fit_manhattan_frame(normals, half, inlier_px)
+    frame = fit_manhattan_frame(normals, half, inlier_px, upright=False)
     if (frame.support() >= MIN_DIRECTION_SEGMENTS).sum() < 2:
         return None
     start = frame.directions
@@ -667,7 +735,8 @@ def _focal_of(ideal: np.ndarray, centre: np.ndarray, diagonal: float, side: floa
     def fitted(f: float) -> tuple[ManhattanFrame, float, float]:
         camera = Intrinsics(f, f, centre[0], centre[1])
         normals, half = interpretation_planes(ideal, _camera_from_pixel(camera))
-        frame = fit_manhattan_frame(normals, half, inlier_px, hypotheses=GRID_HYPOTHESES)
+        frame = fit_manhattan_frame(normals, half, inlier_px, hypotheses=GRID_HYPOTHESES,
+                                    upright=False)
         pixel_from_camera = np.linalg.inv(_camera_from_pixel(camera))
         return frame, f, image_score(ideal, pixel_from_camera, frame.directions, inlier_px)
 
