@@ -80,7 +80,7 @@ FOCAL_RANGE = (0.2, 10.0)
 FINITE_VP_DIAGONALS = 8.0
 #: Weights of :func:`confidence_of` (intercept, rival, focal degrees), fitted by
 #: ``benchmarks/calibrate_confidence.py`` on the York Urban training photos.
-CONFIDENCE_WEIGHTS = (11.287, -10.699, -0.824)
+CONFIDENCE_WEIGHTS = (11.753, -11.364, -0.726)
 #: ``gsrwt estimate`` and ``rectify --auto`` refuse estimates less confident than this: more
 #: likely more than 2 degrees off than not.
 DEFAULT_MIN_CONFIDENCE = 0.5
@@ -90,10 +90,11 @@ RANDOM_FRAMES = 256
 #: else the image has no man-made structure to tell a pose by (:func:`structure_ratio`).
 MIN_STRUCTURE_RATIO = 4.5
 #: The Laplace approximation of an estimated focal length's spread (:func:`focal_uncertainty`)
-#: treats the segments as independent; on the York Urban training photos the focal lengths
-#: are this many times further off than it says (median of |log error| / sigma, over the
-#: 0.674 of a normal distribution), so it is scaled by it.
-FOCAL_SIGMA_SCALE = 4.7
+#: treats the segments as independent; on the York Urban training photos whose frame is right
+#: (vertical within 2 degrees; a wrong frame is the confidence's ``rival`` part) the focal
+#: lengths are this many times further off than it says (median of |log error| / sigma, over
+#: the 0.674 of a normal distribution), so it is scaled by it.
+FOCAL_SIGMA_SCALE = 2.9
 #: An estimated focal length is refused when moving it by one standard deviation turns the
 #: vertical or the wall by more than this many degrees (a pose this far off is wrong).
 MAX_FOCAL_DEGREES = 3.0
