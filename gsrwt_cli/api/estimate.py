@@ -55,7 +55,7 @@ RIVAL_DEGREES = 5.0
 #: The best distinct hypotheses refined and compared (:func:`_most_upright_of_the_best`); a
 #: score less than this many standard errors (of :data:`BOOTSTRAPS` resamples) below the
 #: best one's is a tie, broken by the vertical nearest the image's.
-TOP_FRAMES = 4
+TOP_FRAMES = 2
 TIE_SIGMAS = 1.0
 BOOTSTRAPS = 200
 #: Tied frames whose verticals are this close are told apart by their score, not uprightness.
@@ -80,12 +80,12 @@ FOCAL_RANGE = (0.2, 10.0)
 FINITE_VP_DIAGONALS = 8.0
 #: Weights of :func:`confidence_of` (intercept, rival, focal degrees), fitted by
 #: ``benchmarks/calibrate_confidence.py`` on the York Urban training photos.
-CONFIDENCE_WEIGHTS = (11.753, -11.364, -0.726)
+CONFIDENCE_WEIGHTS = (10.424, -9.839, -0.564)
 #: ``gsrwt estimate`` and ``rectify --auto`` refuse estimates less confident than this: more
 #: likely more than 2 degrees off than not.
 DEFAULT_MIN_CONFIDENCE = 0.5
 #: The null model of :func:`structure_ratio`: this many random orthogonal frames (seeded).
-RANDOM_FRAMES = 256
+RANDOM_FRAMES = 128
 #: A frame must explain this many times the segment length a random frame does (median),
 #: else the image has no man-made structure to tell a pose by (:func:`structure_ratio`).
 MIN_STRUCTURE_RATIO = 4.5
@@ -282,14 +282,15 @@ def fit_manhattan_frame(
 def _distinct_best(candidates: np.ndarray, scores: np.ndarray, count: int) -> list[int]:
     """Indices of the best-scoring ``count`` candidates each with an axis more than
     :data:`RIVAL_DEGREES` from all the axes of every better one (among the best 200)."""
-    chosen: list[int] = []
+    order = np.argsort(-scores, kind="stable")[:200]
     limit = math.cos(math.radians(RIVAL_DEGREES))
-    for index in np.argsort(-scores, kind="stable")[:200]:
-        if all(np.abs(candidates[j].T @ candidates[index]).max(axis=1).min() < limit
-               for j in chosen):
-            chosen.append(int(index))
-            if len(chosen) == count:
-                break
+    open_ = np.ones(len(order), dtype=bool)
+    chosen: list[int] = []
+    while open_.any() and len(chosen) < count:
+        first = order[int(np.argmax(open_))]
+        chosen.append(int(first))
+        nearest = np.abs(np.einsum("ji,hjk->hik", candidates[first], candidates[order]))
+        open_ &= nearest.max(axis=2).min(axis=1) < limit
     return chosen
 
 
