@@ -11,9 +11,15 @@ Steps (no I/O, nothing printed; arrays in, degrees out):
 3. the Manhattan frame (three orthogonal directions) by a minimal-sample search: two segments
    give a direction ``v1 = n1 x n2``, a third gives ``v2 = v1 x n3``, ``v3 = v1 x v2``; each
    hypothesis is scored by a truncated quadratic of the segments' end-point distances, then
-   the best is refined by robust Gauss-Newton over its inliers (:func:`fit_manhattan_frame`);
+   the best two distinct ones are refined by robust Gauss-Newton over their inliers and, if
+   the segments do not prefer one by a standard error, the more upright is kept
+   (:func:`fit_manhattan_frame`);
 4. the vertical (the direction nearest the image's up), the wall (the horizontal nearest the
-   optical axis, so ``|pan| <= 45``) and the pose by the decomposition of pan, tilt and roll.
+   optical axis, so ``|pan| <= 45``) and the pose by the decomposition of pan, tilt and roll;
+5. refusals a user can act on (:func:`_refusal`): no clear man-made structure (the frame
+   explains the segments hardly better than random frames, :func:`structure_ratio`), a focal
+   length the view does not pin down (:func:`focal_uncertainty`); and the confidence, the
+   calibrated chance of being within 2 degrees (:func:`confidence_of`).
 
 Unknown focal length: the clusters' vanishing points do not depend on it; two finite
 orthogonal ones ``p1, p2`` give ``f^2 = -(p1 - c).(p2 - c)``, and the frame
