@@ -118,14 +118,18 @@ class PoseEstimate:
 
     ``pose``: the :class:`~gsrwt_cli.geometry.camera.Pose` (None when ``error`` says why not);
     ``focal``: the focal length in pixels used (given, or estimated when
-    ``focal_estimated``); ``confidence`` in [0, 1] (see :func:`confidence_of`); ``segments``:
+    ``focal_estimated``); ``confidence``: the chance, 0 to 1, that the pose is within 2 degrees
+    (:func:`confidence_of`); ``segments``:
     straight segments fitted; ``inliers``: those that meet in one of the three directions;
     ``directions``: how many of the three directions segments were found for;
     ``vanishing_points``: ``(col, row)`` in ideal (undistorted) pixels of the vertical, the
     wall's horizontal and the wall's normal, None where at infinity; ``world_from_camera``:
     the rotation (rows: up, wall-right, into-wall in the camera frame); ``lines``: ``(N, 4)``
     segment end points ``col1, row1, col2, row2`` as detected; ``labels``: ``(N,)`` the
-    direction of each (0, 1, 2 as in :data:`DIRECTION_NAMES`, -1 for none).
+    direction of each (0, 1, 2 as in :data:`DIRECTION_NAMES`, -1 for none); ``structure``: how
+    many times better than random frames the frame explains the segments
+    (:func:`structure_ratio`); ``focal_uncertainty``: an estimated focal length's
+    (:class:`FocalUncertainty`, None when given); ``rival``: :attr:`ManhattanFrame.rival`.
     """
 
     pose: Pose | None
