@@ -725,6 +725,16 @@ def estimate_pose(
     centre = np.array(principal_point, dtype=np.float64)
     focal = _focal_of(ideal, centre, diagonal, max(width, height), inlier_px)
     if focal is None:
+        # no structure (fur, grass, a painting) says more than "no focal length": the frame
+        # at a usual focal length (the long side) is judged as any other
+        side = float(max(width, height))
+        normals, half = interpretation_planes(
+            ideal, _camera_from_pixel(Intrinsics(side, side, centre[0], centre[1])))
+        frame = fit_manhattan_frame(normals, half, inlier_px, upright=False)
+        structure = structure_ratio(normals, half, frame.directions, inlier_px)
+        if structure < MIN_STRUCTURE_RATIO:
+            return _failure(str(_refusal(structure, None)), detected, segments,
+                            estimated=True, structure=structure)
         return _failure(
             "cannot tell the focal length: no two finite vanishing points of orthogonal "
             f"directions ({segments} segments); give the focal length", detected, segments,
