@@ -23,7 +23,7 @@ REAL = ROOT / "tests" / "data" / "real"
 #: Photos that must be refused: gravel, fruit, an aerial view, a painted wall with no edges.
 REFUSED = [REAL / name for name in ("gravel.jpg", "fruits.jpg", "aero1.jpg", "graf3.jpg")]
 #: Photos of buildings, shown with their rectification.
-ACCEPTED = [ROOT / "tests" / "data" / "facade" / "building.jpg", REAL / "home.jpg"]
+ACCEPTED = [ROOT / "tests" / "data" / "facade" / "building.jpg", REAL / "leuvenB.jpg"]
 
 WIDTH = 1200
 MARGIN = 12
