@@ -29,6 +29,7 @@ from ..geometry.camera import Intrinsics
 from ..imaging.images import (
     DEFAULT_MAX_INPUT_PIXELS,
     encode_image,
+    file_orientation,
     read_image,
 )
 from ..inputs.focal import with_focal
@@ -53,34 +54,44 @@ class EstimateOptions:
     min_confidence: float = DEFAULT_MIN_CONFIDENCE
     wall: str = "frontal"
     max_input_pixels: float = DEFAULT_MAX_INPUT_PIXELS
+    #: ``exif``: the photo as its EXIF orientation displays it; ``ignore``: the stored pixels.
+    orientation: str = "exif"
 
     def __post_init__(self) -> None:
         if self.wall not in WALL_CHOICES:
             raise ValueError(f"wall must be one of {', '.join(WALL_CHOICES)}")
 
 
-def camera_for(path: Path, values: Mapping[str, Any], where: str
+def camera_for(path: Path, values: Mapping[str, Any], where: str, orientation: int = 1
                ) -> tuple[Intrinsics | None, str, tuple[float, float] | None]:
     """The intrinsics an image's values give (their pose left out), where its focal length
     comes from (``option``, ``sidecar``, ``camera``, ``exif``, or ``estimated`` when nothing
     gives one: then the intrinsics are None), and the principal point given without a focal
-    length. Raises :class:`~gsrwt_cli.inputs.records.RecordError` for a bad value."""
+    length; all of the photo as its EXIF ``orientation`` displays it (1: as stored). Raises
+    :class:`~gsrwt_cli.inputs.records.RecordError` for a bad value."""
     own, source = with_focal(
         path, {name: value for name, value in values.items() if name not in _POSE_VALUES},
-        where)
+        where, orientation)
     if source is None:
-        view = view_from_values({**own, "pan": 0, "tilt": 0, "focal": 1.0}, where)
+        view = view_from_values({**own, "pan": 0, "tilt": 0, "focal": 1.0}, where, orientation)
         given = own.get("cx") not in (None, "")
         return None, "estimated", (view.cx, view.cy) if given else None
-    return view_from_values({**own, "pan": 0, "tilt": 0}, where).intrinsics, source, None
+    return (view_from_values({**own, "pan": 0, "tilt": 0}, where, orientation).intrinsics,
+            source, None)
+
+
+def orientation_of(path: Path, options: EstimateOptions) -> int:
+    """The EXIF orientation an image is estimated in (1 with ``orientation="ignore"``)."""
+    return 1 if options.orientation == "ignore" else file_orientation(path)
 
 
 def estimate_file(path: Path, values: Mapping[str, Any], where: str, options: EstimateOptions
                   ) -> tuple[PoseEstimate, Intrinsics | None, str, np.ndarray]:
     """Read ``path`` and estimate its pose: the estimate, the camera it was given (None when
     the focal length was estimated), the focal length's source and the decoded image."""
-    camera, source, principal_point = camera_for(path, values, where)
-    image = read_image(path, options.max_input_pixels)
+    orientation = orientation_of(path, options)
+    camera, source, principal_point = camera_for(path, values, where, orientation)
+    image = read_image(path, options.max_input_pixels, orientation)
     height, width = image.shape[:2]
     if camera is not None and camera.width is not None and (
             (camera.width, camera.height) != (width, height)):
@@ -155,7 +166,8 @@ def estimated_view_values(path: Path, values: Mapping[str, Any], where: str,
     height, width = image.shape[:2]
     del image
     checked(estimate, options)
-    principal_point = camera_for(path, values, where)[2] if camera is None else None
+    principal_point = (camera_for(path, values, where, orientation_of(path, options))[2]
+                       if camera is None else None)
     merged = {name: value for name, value in values.items()
               if name not in (*_POSE_VALUES, *SENSOR_FIELDS, "focal", "fx", "fy")}
     merged.update(estimated_values(estimate, camera, width, height, principal_point))
@@ -197,7 +209,8 @@ def process_estimate(job: EstimateJob, options: EstimateOptions,
             height, width = image.shape[:2]
             principal_point = None
             if camera is None:
-                principal_point = camera_for(job.source, job.values, job.where)[2]
+                principal_point = camera_for(job.source, job.values, job.where,
+                                             orientation_of(job.source, options))[2]
             if job.picture is not None:
                 from ..api.estimate_drawing import draw_estimate  # only when pictures are asked for
 

@@ -26,9 +26,11 @@ from ..api.rectify import plan_image
 from ..base.messages import one_line
 from ..geometry.camera import View
 from ..geometry.framing import Plan
+from ..geometry.orientation import displayed_size
 from ..imaging.images import (
     Scratch,
     check_writable,
+    file_orientation,
     image_file_size,
     measure_image_file,
 )
@@ -127,10 +129,25 @@ def plan_jobs(
 # --------------------------------------------------------------------------------------------
 
 
-def _view(job: Job, estimate: bool = True) -> tuple[View, str, dict[str, Any]]:
+def _orientation(job: Job, settings: Settings) -> int | None:
+    """The EXIF orientation the job's image is rectified in (1-8: the photo as displayed),
+    None with ``--orientation ignore`` (the stored pixels)."""
+    if settings.orientation == "ignore":
+        return None
+    return file_orientation(job.source)
+
+
+def _orientation_cell(orientation: int | None) -> str:
+    """The ``orientation`` column: the EXIF value applied, or ``ignored``."""
+    return "ignored" if orientation is None else str(orientation)
+
+
+def _view(job: Job, estimate: bool = True, orientation: int | None = None
+          ) -> tuple[View, str, dict[str, Any]]:
     """The job's view, where its focal length came from (EXIF read here if needed) and its
     ``pose_source`` and ``confidence`` columns; an estimated pose is estimated here (unless
-    not ``estimate``: then it is an error)."""
+    not ``estimate``: then it is an error). ``orientation``: the image's EXIF orientation,
+    applied (the view of the displayed photo; None or 1: of the stored pixels)."""
     if job.error is not None:
         raise JobError(job.error)
     assert job.values is not None
@@ -142,18 +159,19 @@ def _view(job: Job, estimate: bool = True) -> tuple[View, str, dict[str, Any]]:
         values, found, confidence = estimated_view_values(job.source, job.values, job.where,
                                                           job.estimate)
         try:
-            view = view_from_values(values, job.where)
+            view = view_from_values(values, job.where, orientation or 1)
         except RecordError as error:
             raise JobError(str(error)) from None
         return view, found, {"pose_source": "estimated", "confidence": confidence}
-    values, source = with_focal(job.source, job.values, job.where)
+    values, source = with_focal(job.source, job.values, job.where, orientation or 1)
     if source is None:
         raise JobError(
             "no focal length: none in the parameters, no camera file, and no usable "
             "focal length in the image's EXIF"
         )
     try:
-        return view_from_values(values, job.where), source, {"pose_source": job.pose_source}
+        return (view_from_values(values, job.where, orientation or 1), source,
+                {"pose_source": job.pose_source})
     except RecordError as error:
         raise JobError(str(error)) from None
 
@@ -196,8 +214,10 @@ def process_job(job: Job, settings: Settings, scratch: Scratch | None = None) ->
     try:
         with np.errstate(all="ignore"), warnings.catch_warnings(), fetched(job.source):
             warnings.simplefilter("ignore")
-            view, source, pose = _view(job)
-            row.update(params_row(view, str(job.source)), focal_source=source, **pose)
+            orientation = _orientation(job, settings)
+            view, source, pose = _view(job, orientation=orientation)
+            row.update(params_row(view, str(job.source)), focal_source=source, **pose,
+                       orientation=_orientation_cell(orientation))
             if checking and not is_regular_file(job.output):
                 raise JobError(NOT_A_FILE)
             if not checking and job.output.exists() and not settings.overwrite:
@@ -206,9 +226,10 @@ def process_job(job: Job, settings: Settings, scratch: Scratch | None = None) ->
                 return record_row(job, settings, "ok")
             if not job.source.is_file():
                 raise JobError("no such file" if not job.source.exists() else "not a file")
-            width, height = measure_image_file(job.source, settings.max_input_pixels)
+            width, height = displayed_size(
+                orientation or 1, *measure_image_file(job.source, settings.max_input_pixels))
             info = _plan(view, width, height, settings)  # refuses big outputs undecoded
-            image = scratch.read(job.source, settings.max_input_pixels)
+            image = scratch.read(job.source, settings.max_input_pixels, orientation or 1)
             dtype, channels = image.dtype, 1 if image.ndim == 2 else image.shape[2]
             del image  # the scratch holds it for the warp
             check_writable(
@@ -245,9 +266,12 @@ def record_row(job: Job, settings: Settings, status: str = "ok") -> dict[str, An
     row: dict[str, Any] = {"image": str(job.source), "output": str(job.output)}
     try:
         with np.errstate(all="ignore"):
-            view, source, pose = _view(job)
-            row.update(params_row(view, str(job.source)), focal_source=source, **pose)
-            size = measure_image_file(job.source, settings.max_input_pixels)
+            orientation = _orientation(job, settings)
+            view, source, pose = _view(job, orientation=orientation)
+            row.update(params_row(view, str(job.source)), focal_source=source, **pose,
+                       orientation=_orientation_cell(orientation))
+            size = displayed_size(orientation or 1,
+                                  *measure_image_file(job.source, settings.max_input_pixels))
             info = _plan(view, size[0], size[1], settings)
         row.update(_geometry(info), image=str(job.source), status=status,
                    made_with=_made_with(job, settings))
@@ -263,12 +287,14 @@ def record_row(job: Job, settings: Settings, status: str = "ok") -> dict[str, An
     return row
 
 
-def died_row(job: Job, reason: str) -> dict[str, Any]:
+def died_row(job: Job, reason: str, settings: Settings) -> dict[str, Any]:
     """The row of an image whose worker died while working on it."""
     row: dict[str, Any] = {"image": str(job.source), "output": str(job.output)}
     with contextlib.suppress(Exception), np.errstate(all="ignore"):
-        view, source, pose = _view(job, estimate=False)
-        row.update(params_row(view, str(job.source)), focal_source=source, **pose)
+        orientation = _orientation(job, settings)
+        view, source, pose = _view(job, estimate=False, orientation=orientation)
+        row.update(params_row(view, str(job.source)), focal_source=source, **pose,
+                   orientation=_orientation_cell(orientation))
     row.update(status="error", error=reason)
     return row
 
@@ -283,7 +309,7 @@ def dead_worker_row(job: Job, reason: str, settings: Settings) -> dict[str, Any]
     """The row of an image whose worker died: ``error``, unless it was done after all."""
     if _written_before_it_stopped(job, settings):
         return record_row(job, settings, status="ok")
-    return died_row(job, reason)
+    return died_row(job, reason, settings)
 
 
 def interrupted_row(job: Job, settings: Settings) -> dict[str, Any]:
@@ -292,7 +318,7 @@ def interrupted_row(job: Job, settings: Settings) -> dict[str, Any]:
     next run checks it again)."""
     if _written_before_it_stopped(job, settings):
         return record_row(job, settings, status="ok")
-    row = died_row(job, "not done: the run was interrupted")
+    row = died_row(job, "not done: the run was interrupted", settings)
     row["status"] = "interrupted"
     return row
 

@@ -133,6 +133,8 @@ def made_with(values: Mapping[str, Any] | None, wall: str | None, settings: Sett
     words += [("interpolation", settings.interpolation),
               ("antialias", "on" if settings.antialias else "off"),
               ("fill", _number(settings.fill)), ("alpha", "on" if settings.alpha else "off")]
+    if settings.orientation != "exif":  # the default left out: tables made before it hold
+        words.append(("orientation", settings.orientation))
     if suffix.lower() in LOSSY:
         words.append(("quality", str(settings.quality)))
     return " ".join(f"{name}={value}" for name, value in words)

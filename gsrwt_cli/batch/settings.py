@@ -27,6 +27,8 @@ class Settings:
     dry_run: bool = False
     max_input_pixels: float = DEFAULT_MAX_INPUT_PIXELS
     antialias: bool = True
+    #: ``exif``: the photo as its EXIF orientation displays it; ``ignore``: the stored pixels.
+    orientation: str = "exif"
     root: Path | Location | None = None  # the output directory: nothing is written outside it
     #: Words an error in the caller's terms (a picklable callable: it goes to workers).
     describe: Describe | None = None

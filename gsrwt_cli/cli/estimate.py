@@ -32,6 +32,7 @@ from .options import (
     load_sidecar_option,
     make_output_directory,
     max_input_pixels_option,
+    orientation_option,
     prepare_table,
     quiet_option,
     report_error,
@@ -88,11 +89,13 @@ camera_options = field_options(
               help="Write a picture per image (DIR/NAME.png): segments by direction, the "
                    "horizon, the frontal view's outline.")
 @max_input_pixels_option
+@orientation_option
 @jobs_option
 @quiet_option("No summary on stderr.")
 def estimate(inputs: tuple[str, ...], output: str | None, fmt: str | None, recursive: bool,
              sidecar: Path | None, min_confidence: float, wall: str, draw: Path | None,
-             max_input_pixels: str, jobs: int | None, quiet: bool, **camera: Any) -> None:
+             max_input_pixels: str, orientation: str, jobs: int | None, quiet: bool,
+             **camera: Any) -> None:
     """Estimate pan, tilt and roll of each image from its straight lines (thesis future work 1).
 
     Writes one sidecar row per image: image, pan, tilt, roll, focal, cx, cy, width,
@@ -151,7 +154,7 @@ def estimate(inputs: tuple[str, ...], output: str | None, fmt: str | None, recur
                 error = f"--draw: {problem}"
         job_list.append(EstimateJob(source.path, PurePosixPath(source.relative).as_posix(),
                                     values, where, picture, error))
-    options = EstimateOptions(min_confidence, wall, input_pixel_limit)
+    options = EstimateOptions(min_confidence, wall, input_pixel_limit, orientation)
     for problem in unreadable:
         report_error(problem)
     counts = {"ok": 0, "failed": len(unreadable), "interrupted": 0}

@@ -308,6 +308,20 @@ def max_input_pixels_option(func: F) -> F:
                              "pixels.")(func)
 
 
+#: ``--orientation``'s choices: the photo as its EXIF orientation displays it, or as stored.
+ORIENTATION_CHOICES = ("exif", "ignore")
+
+
+def orientation_option(func: F) -> F:
+    """``--orientation``: apply the EXIF orientation (default) or use the stored pixels."""
+    return click.option("--orientation", type=click.Choice(ORIENTATION_CHOICES),
+                        default="exif", show_default=True,
+                        help="exif: turn the photo as its EXIF orientation says, as viewers "
+                             "show it (pan, tilt, roll, cx, cy and pixels are of the photo as "
+                             "displayed; a --camera file's of the sensor, turned with it); "
+                             "ignore: the pixels as stored.")(func)
+
+
 def quiet_option(what: str) -> Callable[[F], F]:
     """``-q/--quiet``: ``what`` the command leaves out (its summary, its progress bar)."""
     return click.option("-q", "--quiet", is_flag=True, help=what)

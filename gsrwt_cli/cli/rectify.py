@@ -84,6 +84,7 @@ from .options import (
     jobs_option,
     load_sidecar_option,
     max_input_pixels_option,
+    orientation_option,
     prepare_directory,
     prepare_table,
     quality_option,
@@ -473,6 +474,7 @@ def dask_executor(address: str, processes: int, retries: int,
               help="Lower the scale so that the output fits in WxH pixels (the table's "
                    "'scale' says what was used), instead of a larger output.")
 @max_input_pixels_option
+@orientation_option
 @interpolation_option
 @click.option("--fill", type=Number(), default=0.0, show_default=True,
               help="Value of pixels with no source, in the image's units (0-255, 0-65535).")
@@ -538,7 +540,7 @@ def rectify(inputs: tuple[str, ...], outdir: Path | Location, recursive: bool,
     settings, extension = settings_from_options(outdir, options)
     table = table_from_options(outdir, options.pop("table_path"), options.pop("shard"))
     estimating = (EstimateOptions(options.pop("min_confidence"), options.pop("wall"),
-                                  settings.max_input_pixels)
+                                  settings.max_input_pixels, settings.orientation)
                   if options.pop("auto") else None)
     batch = plan_batch(inputs, outdir, recursive, sidecar, table, settings, extension,
                        estimating, view_kwargs=options)
@@ -610,6 +612,7 @@ def settings_from_options(outdir: Path | Location, options: dict[str, Any]
         describe=RectifyWording(bbox if isinstance(bbox, str) else "box",
                                 px_per_unit is not None, size_limit is not None),
         antialias=options.pop("antialias"),
+        orientation=options.pop("orientation"),
     )
     return settings, extension
 

@@ -25,6 +25,7 @@ import imagesize
 import numpy as np
 
 from ..base.messages import one_line
+from ..geometry.orientation import ORIENTATION_TAG, orientation_steps, valid_orientation
 from ..geometry.pixelmap import PixelMap
 from ..io.storage import open_input
 
@@ -185,6 +186,38 @@ def image_file_size(path: str | Path) -> tuple[int, int] | None:
         return None
 
 
+def file_orientation(path: str | Path) -> int:
+    """The EXIF orientation (1-8) of an image file, 1 when it has none or an invalid one
+    (:func:`~gsrwt_cli.geometry.orientation.valid_orientation`): JPEG, PNG (``eXIf``), TIFF
+    and WebP, read by Pillow (``Image.open`` reads the header, never the pixels); whatever
+    Pillow raises on a damaged file means 1."""
+    import warnings
+
+    from PIL import Image  # Pillow only when an image is read
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # "Corrupt EXIF data", "Truncated File Read", ...
+        try:
+            with open_input(path) as handle, Image.open(handle) as image:
+                value = image.getexif().get(ORIENTATION_TAG)
+        except Exception:  # noqa: BLE001 - a damaged file of a third-party parser: upright
+            return 1
+    return valid_orientation(value)
+
+
+def displayed_pixels(image: np.ndarray, orientation: int) -> np.ndarray:
+    """The stored ``image`` as its EXIF ``orientation`` (1-8) displays it, a new contiguous
+    array (the image itself for 1): turned and mirrored as
+    :mod:`~gsrwt_cli.geometry.orientation`'s table says, by numpy views and one copy."""
+    if orientation == 1:
+        return image
+    swap, flip_x, flip_y = orientation_steps(orientation)
+    view = image.swapaxes(0, 1) if swap else image
+    view = view[:, ::-1] if flip_x else view
+    view = view[::-1] if flip_y else view
+    return np.ascontiguousarray(view)
+
+
 def measure_image_file(path: str | Path, max_pixels: float) -> tuple[int, int]:
     """``(width, height)`` of an image file from its header, refused as :func:`decode_image`
     would refuse it (empty, unreadable, unmeasurable, above ``max_pixels``), undecoded."""
@@ -309,10 +342,10 @@ def decode_image(data: bytes, max_pixels: float = DEFAULT_MAX_INPUT_PIXELS, *,
     The header is measured first (:func:`header_size`): an image of more than ``max_pixels``
     pixels is refused before any pixel memory is allocated. Raises :class:`ImageError` for
     data that is empty, truncated, damaged or not decodable; what the codec returns is
-    checked, never trusted. EXIF orientation is not applied (pan and tilt describe the
-    sensor). JPEGs are decoded by :func:`_decode_jpeg` (``padded``: a colour JPEG as BGRA
-    with an opaque fourth channel, for the warp; ``into``: memory to decode it into), other
-    files by OpenCV.
+    checked, never trusted. EXIF orientation is not applied here (:func:`read_image` and
+    :meth:`Scratch.read` apply it). JPEGs are decoded by :func:`_decode_jpeg` (``padded``: a
+    colour JPEG as BGRA with an opaque fourth channel, for the warp; ``into``: memory to
+    decode it into), other files by OpenCV.
     """
     if not data:
         raise ImageError("empty file")
@@ -343,9 +376,12 @@ def decode_image(data: bytes, max_pixels: float = DEFAULT_MAX_INPUT_PIXELS, *,
     return image
 
 
-def read_image(path: str | Path, max_pixels: float = DEFAULT_MAX_INPUT_PIXELS) -> np.ndarray:
-    """Read and decode an image file (:func:`decode_image`); the path never reaches OpenCV."""
-    return decode_image(read_file_bytes(path), max_pixels)
+def read_image(path: str | Path, max_pixels: float = DEFAULT_MAX_INPUT_PIXELS,
+               orientation: int = 1) -> np.ndarray:
+    """Read and decode an image file (:func:`decode_image`); the path never reaches OpenCV.
+    ``orientation``: its EXIF orientation (:func:`file_orientation`), applied
+    (:func:`displayed_pixels`); 1, the default, leaves the pixels as stored."""
+    return displayed_pixels(decode_image(read_file_bytes(path), max_pixels), orientation)
 
 
 # --------------------------------------------------------------------------------------------
@@ -477,8 +513,10 @@ class Scratch:
             self._regions[region] = np.empty(nbytes, np.uint8)
         return self._regions[region][:nbytes].view(dtype).reshape(shape)
 
-    def read(self, path: str | Path, max_pixels: float = DEFAULT_MAX_INPUT_PIXELS) -> np.ndarray:
-        """Decode an image (:func:`read_image`) for :meth:`warp`, and return it.
+    def read(self, path: str | Path, max_pixels: float = DEFAULT_MAX_INPUT_PIXELS,
+             orientation: int = 1) -> np.ndarray:
+        """Decode an image (:func:`read_image`) for :meth:`warp`, and return it, as its EXIF
+        ``orientation`` displays it (:func:`displayed_pixels`; 1: as stored).
 
         The previous image is dropped first, so a failure never leaves its pixels behind.
         """
@@ -505,6 +543,8 @@ class Scratch:
             # the memory it frees. Holding them across the decode costs two frames more.
             self._regions = [np.empty(0, np.uint8), np.empty(0, np.uint8)]
             image = decode_image(data, max_pixels)
+        if orientation != 1:  # turned into memory of its own (the regions hold stored pixels)
+            image = displayed_pixels(image, orientation)
         self._decoded = image
         return image[..., :3] if self._padded else image
 

@@ -6,6 +6,7 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
+from ..geometry.orientation import displayed_size
 from ..imaging.images import image_file_size
 from ..io.storage import Location, open_input
 from .exif import ExifFocal, focal_from_exif
@@ -21,12 +22,15 @@ def focal_source(values: Mapping[str, Any], where: str) -> str | None:
     return None
 
 
-def exif_focal(path: Path | Location) -> ExifFocal | None:
-    """The focal length the image's EXIF gives (:func:`~gsrwt_cli.inputs.exif.focal_from_exif`)."""
+def exif_focal(path: Path | Location, orientation: int = 1) -> ExifFocal | None:
+    """The focal length the image's EXIF gives (:func:`~gsrwt_cli.inputs.exif.focal_from_exif`),
+    for the photo as its EXIF ``orientation`` displays it (5-8: ``fx, fy`` of the displayed
+    width and height, the focal plane's resolutions swapped; 1: as stored)."""
     try:
         size = image_file_size(path)
         if size is None:
             return None
+        size = displayed_size(orientation, *size)
         with open_input(path) as handle:
             head = handle.read(1 << 20)  # EXIF lives in the first 64 KB segment
     except OSError:
@@ -34,20 +38,21 @@ def exif_focal(path: Path | Location) -> ExifFocal | None:
     return focal_from_exif(head, *size)
 
 
-def with_focal(path: Path | Location, values: Mapping[str, Any], where: str
-               ) -> tuple[dict[str, Any], str | None]:
+def with_focal(path: Path | Location, values: Mapping[str, Any], where: str,
+               orientation: int = 1) -> tuple[dict[str, Any], str | None]:
     """An image's values with its focal length resolved, the one way every command does it:
     the values' own (:func:`focal_source`), else the image's EXIF (``fx``, ``fy`` added;
     source ``exif``); a focal length in millimetres gets the image's size, which it needs.
+    Sizes are those of the photo as its EXIF ``orientation`` displays it (1: as stored).
     Returns the values and the source, None when nothing gives a focal length."""
     values = dict(values)
     source = focal_source(values, where)
     if values.get("focal_mm") not in (None, "") and values.get("width") in (None, ""):
         size = image_file_size(path)  # millimetres become pixels with the image's size
         if size is not None:
-            values["width"], values["height"] = size
+            values["width"], values["height"] = displayed_size(orientation, *size)
     if source is None:
-        found = exif_focal(path)
+        found = exif_focal(path, orientation)
         if found is not None:
             values["fx"], values["fy"], source = found.fx, found.fy, "exif"
     return values, source

@@ -30,6 +30,7 @@ from ..geometry.camera import (
     ViewError,
 )
 from ..geometry.gsrwt import pan_tilt_from_gsrwt
+from ..geometry.orientation import displayed_intrinsics
 from ..geometry.pinhole import SIMPLE_PINHOLE_FIELDS, pinhole_numbers  # noqa: F401  (named here too)
 from ..geometry.rotations import PoseError, distance_from_tvec, pose_from_quaternion, pose_from_rvec
 
@@ -121,8 +122,14 @@ def simple_pinhole_numbers(values: Mapping[str, Any], where: str) -> tuple[float
     return pinhole_numbers(values, where, _number)
 
 
-def view_from_values(values: Mapping[str, Any], where: str) -> View:
+def view_from_values(values: Mapping[str, Any], where: str, orientation: int = 1) -> View:
     """Build a :class:`View` from raw values (numbers or numeric strings), naming what is wrong.
+
+    ``orientation``: the photo's EXIF orientation when it is applied (1: as stored). The
+    values describe the photo as displayed; a calibration file (``camera``) describes the
+    sensor, so its intrinsics are turned to the displayed photo
+    (:func:`~gsrwt_cli.geometry.orientation.displayed_intrinsics`) before the values' own
+    fields go over them.
 
     When ``delta`` and ``a`` are given instead of pan and tilt, the pose comes from the GS-RWT
     parameters (:func:`~gsrwt_cli.geometry.gsrwt.pan_tilt_from_gsrwt`); a given ``gamma`` must
@@ -166,6 +173,7 @@ def view_from_values(values: Mapping[str, Any], where: str) -> View:
                 base = load_camera_file(str(camera))
             except CalibrationError as error:
                 raise RecordError(where, "camera", str(error)) from None
+            base = displayed_intrinsics(base, orientation)
             view = _view_with_camera(base, numbers_given, lens, values)
         else:
             view = View(**{name: numbers_given[name] for name in VIEW_FIELDS

@@ -16,8 +16,8 @@ PARAMS_COLUMNS = (
 #: ``gsrwt rectify``: the view's parameters, where they came from, the output and its
 #: geometry, what made it, and how it went.
 RECTIFY_COLUMNS = (
-    *PARAMS_COLUMNS, "focal_source", "pose_source", "confidence", "output", "out_width",
-    "out_height", "scale", "homography", "made_with", "status", "error",
+    *PARAMS_COLUMNS, "focal_source", "pose_source", "confidence", "orientation", "output",
+    "out_width", "out_height", "scale", "homography", "made_with", "status", "error",
 )
 
 #: Where a rectify row's focal length and pose came from (``focal_source``, ``pose_source``),
@@ -25,6 +25,9 @@ RECTIFY_COLUMNS = (
 FOCAL_SOURCES = ("option", "sidecar", "camera", "exif", "estimated")
 POSE_SOURCES = ("sidecar", "yaml", "options", "estimated")
 RECTIFY_STATUSES = ("ok", "skipped", "error", "interrupted", "planned")
+#: A rectify row's ``orientation``: the EXIF orientation applied (1-8, 1 also for a photo
+#: without one), or ``ignored`` (``--orientation ignore``: the stored pixels).
+ORIENTATION_VALUES = ("1", "2", "3", "4", "5", "6", "7", "8", "ignored")
 
 #: The vanishing points ``gsrwt estimate`` reports, in the estimator's order (its
 #: ``DIRECTION_NAMES``).

@@ -18,6 +18,7 @@ from ..base.messages import QUOTE_LIMIT, escape_controls, quote, shorten
 from ..base.numerals import parse_decimal, parse_whole
 from .columns import (
     FOCAL_SOURCES,
+    ORIENTATION_VALUES,
     PARAMS_COLUMNS,
     POSE_SOURCES,
     RECTIFY_COLUMNS,
@@ -236,6 +237,7 @@ RECTIFY_TABLE = TableSchema(
      "out_height": POSITIVE_WHOLE, "homography": MATRIX,
      "focal_source": choice(*FOCAL_SOURCES, optional=True),
      "pose_source": choice(*POSE_SOURCES, optional=True),
+     "orientation": choice(*ORIENTATION_VALUES, optional=True),
      "status": choice(*RECTIFY_STATUSES)},
 )
 
