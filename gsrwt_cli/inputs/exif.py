@@ -19,8 +19,9 @@ gsrwt's own: ``benchmarks/bench_exif.py`` measured it against exifread (import 9
 15 ms, 0.13 ms per phone photo both, and on 3000 damaged EXIF blocks no exception escaped
 Pillow, where 134 ``IndexError`` escaped exifread, which also logged 2400 lines and took up to
 150 ms on one). Pillow's warnings about damaged EXIF are silenced while reading; whatever it
-raises on a damaged file means "no EXIF focal length". EXIF orientation stays ignored: pan and
-tilt describe the sensor, and ``W, H`` are the stored image's.
+raises on a damaged file means "no EXIF focal length". The tags describe the stored pixels
+(``W, H`` are the stored image's); for a photo whose EXIF orientation turns it a quarter,
+:func:`~gsrwt_cli.inputs.focal.exif_focal` swaps ``fx`` and ``fy``.
 """
 
 from __future__ import annotations

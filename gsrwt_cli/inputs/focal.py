@@ -6,7 +6,7 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from ..geometry.orientation import displayed_size
+from ..geometry.orientation import displayed_size, swaps_sides
 from ..imaging.images import image_file_size
 from ..io.storage import Location, open_input
 from .exif import ExifFocal, focal_from_exif
@@ -24,18 +24,22 @@ def focal_source(values: Mapping[str, Any], where: str) -> str | None:
 
 def exif_focal(path: Path | Location, orientation: int = 1) -> ExifFocal | None:
     """The focal length the image's EXIF gives (:func:`~gsrwt_cli.inputs.exif.focal_from_exif`),
-    for the photo as its EXIF ``orientation`` displays it (5-8: ``fx, fy`` of the displayed
-    width and height, the focal plane's resolutions swapped; 1: as stored)."""
+    for the photo as its EXIF ``orientation`` displays it: the tags describe the stored
+    pixels, so 5-8 swap ``fx`` and ``fy`` (the 35 mm-equivalent, by the diagonal, is the same
+    either way); 1: as stored."""
     try:
-        size = image_file_size(path)
+        size = image_file_size(path)  # the stored pixels', which the EXIF tags describe
         if size is None:
             return None
-        size = displayed_size(orientation, *size)
         with open_input(path) as handle:
             head = handle.read(1 << 20)  # EXIF lives in the first 64 KB segment
     except OSError:
         return None
-    return focal_from_exif(head, *size)
+    found = focal_from_exif(head, *size)
+    if found is None or not swaps_sides(orientation):
+        return found
+    return ExifFocal((found.fy, found.fx), f"{found.source}; turned by EXIF orientation "
+                     f"{orientation}")
 
 
 def with_focal(path: Path | Location, values: Mapping[str, Any], where: str,

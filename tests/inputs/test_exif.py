@@ -233,3 +233,31 @@ def test_damaged_exif_never_raises():
 def test_the_image_size_must_be_given():
     with pytest.raises(ValueError, match="positive whole numbers"):
         focal_from_exif(pillow_jpeg(PHONE), 0, 3000)
+
+
+# --------------------------------------------------------------------------------------------
+# EXIF orientation: the tags describe the stored pixels
+
+
+@pytest.mark.parametrize("orientation", [1, 3, 6, 8])
+def test_a_photo_turned_a_quarter_swaps_fx_and_fy(tmp_path, orientation):
+    """The focal plane's X resolution is along the stored rows: displayed turned a quarter
+    (6, 8) it is along the displayed columns' other axis, so fx and fy swap; the 35 mm
+    equivalent, by the diagonal, does not change."""
+    from gsrwt_cli.inputs.focal import exif_focal
+
+    exif = Image.Exif()
+    exif[0x0112] = orientation
+    exif.get_ifd(0x8769).update({**PHONE, PIXEL_X: 4000, PIXEL_Y: 3000})  # stored, scaled
+    path = tmp_path / "phone.jpg"
+    Image.new("RGB", (400, 300), (90, 120, 150)).save(path, "JPEG", exif=exif)
+    found = exif_focal(path, orientation)
+    along_width, along_height = 4.73 * 4000 / 6.17 / 10, 4.73 * 3000 / 4.63 / 10  # 400x300
+    if orientation in (6, 8):
+        assert found.focal_px == pytest.approx((along_height, along_width), rel=1e-12)
+        assert f"turned by EXIF orientation {orientation}" in found.source
+    else:
+        assert found.focal_px == pytest.approx((along_width, along_height), rel=1e-12)
+    exif.get_ifd(0x8769).update({PLANE_X: 0})  # no focal plane: the 35 mm tag, unturned
+    Image.new("RGB", (400, 300)).save(path, "JPEG", exif=exif)
+    assert exif_focal(path, orientation).fx == pytest.approx(26 * 500 / 43.2666, rel=1e-4)
