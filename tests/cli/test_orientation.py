@@ -177,3 +177,32 @@ def test_a_calibration_file_describes_the_sensor_of_a_turned_photo(tmp_path):
     assert np.array_equal(ignored, of_sensor)
     rows = by_image_name([row])
     assert rows["turned.png"]["fx_px"] == read_table(tmp_path / "sensor" / "t.csv")[0]["fy_px"]
+
+
+def test_estimate_and_auto_see_the_displayed_photo(tmp_path):
+    """A sample door view (pan 40, tilt -12, f = 700) stored turned, tagged 8: ``estimate``
+    finds the displayed photo's pose; ignoring the tag, the sideways photo's is another one;
+    ``rectify --auto`` rectifies the displayed photo."""
+    path = tmp_path / "door.png"
+    with Image.open(Path(__file__).resolve().parents[2] / "sample_data" / "views"
+                    / "door_p40_t-12_f700.jpg") as door:
+        write_oriented(path, door.copy(), 8)
+
+    def pose(*extra: str) -> dict:
+        result = run_gsrwt("estimate", str(path), "--focal", "700", "--format", "csv", *extra)
+        assert result.returncode == 0, result.stderr
+        return read_table(result.stdout)[0]
+
+    shown = pose()
+    assert abs(float(shown["pan"]) - 40) < 0.5 and abs(float(shown["tilt"]) + 12) < 0.5
+    assert abs(float(shown["roll"])) < 0.5
+    assert (shown["width"], shown["height"]) == ("1280", "960")
+    stored = pose("--orientation", "ignore")
+    assert (stored["width"], stored["height"]) == ("960", "1280")
+    assert stored["status"] != "ok" or abs(float(stored["pan"]) - 40) + abs(
+        float(stored["tilt"]) + 12) + abs(float(stored["roll"])) > 5  # another camera
+    result = run_gsrwt("rectify", str(path), "--auto", "--focal", "700", "-j", "1", "-o",
+                       str(tmp_path / "auto"), "--table", str(tmp_path / "auto.csv"))
+    assert result.returncode == 0, result.stderr
+    row = read_table(tmp_path / "auto.csv")[0]
+    assert row["orientation"] == "8" and abs(float(row["pan_deg"]) - 40) < 0.5
