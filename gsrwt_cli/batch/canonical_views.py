@@ -17,7 +17,7 @@ import numpy as np
 
 from ..api.rectify import rectify_image
 from ..geometry.pixelmap import PixelMap
-from ..imaging.images import ImageError, read_image
+from ..imaging.images import ImageError, file_orientation, read_image
 from ..inputs.parameters import NotFound, Problem, resolve_parameters
 from ..inputs.records import RecordError
 from ..inputs.sidecar import Sidecar
@@ -42,13 +42,18 @@ class CanonicalView:
 
 
 def canonical_views(
-    paths: list[Path], sidecar: Sidecar | None, fallback: dict[str, Any]
+    paths: list[Path], sidecar: Sidecar | None, fallback: dict[str, Any],
+    orientation: str = "exif",
 ) -> Iterator[CanonicalView | tuple[Path, str]]:
-    """Each image's canonical view, or ``(path, reason)`` when it cannot be read or rectified."""
+    """Each image's canonical view, or ``(path, reason)`` when it cannot be read or rectified.
+
+    ``orientation``: ``exif``, the photo as its EXIF orientation displays it (its parameters
+    and the ``_src`` pixels are of that photo), or ``ignore``, the pixels as stored."""
     for path in paths:
         found = resolve_parameters(path, PurePosixPath(path.name), sidecar, fallback)
         try:
-            image = pixels8(read_image(path))  # what the edges need, before the warp
+            turn = 1 if orientation == "ignore" else file_orientation(path)
+            image = pixels8(read_image(path, orientation=turn))  # what the edges need
         except ImageError as error:
             yield path, str(error)
             continue
@@ -59,7 +64,7 @@ def canonical_views(
             yield path, found.message
             continue
         try:
-            view = found.view()
+            view = found.view(turn)
             frontal, info = rectify_image(image, view)
         except (RecordError, ValueError) as error:
             yield path, str(error)

@@ -94,7 +94,7 @@ camera_options = field_options(
 @quiet_option("No summary on stderr.")
 def estimate(inputs: tuple[str, ...], output: str | None, fmt: str | None, recursive: bool,
              sidecar: Path | None, min_confidence: float, wall: str, draw: Path | None,
-             max_input_pixels: str, orientation: str, jobs: int | None, quiet: bool,
+             max_input_pixels: str, exif_orientation: str, jobs: int | None, quiet: bool,
              **camera: Any) -> None:
     """Estimate pan, tilt and roll of each image from its straight lines (thesis future work 1).
 
@@ -154,7 +154,7 @@ def estimate(inputs: tuple[str, ...], output: str | None, fmt: str | None, recur
                 error = f"--draw: {problem}"
         job_list.append(EstimateJob(source.path, PurePosixPath(source.relative).as_posix(),
                                     values, where, picture, error))
-    options = EstimateOptions(min_confidence, wall, input_pixel_limit, orientation)
+    options = EstimateOptions(min_confidence, wall, input_pixel_limit, exif_orientation)
     for problem in unreadable:
         report_error(problem)
     counts = {"ok": 0, "failed": len(unreadable), "interrupted": 0}

@@ -15,7 +15,7 @@ import numpy as np
 from ..base.messages import quote
 from ..base.numerals import parse_decimal
 from ..batch.canonical_views import CanonicalView, canonical_views
-from ..imaging.images import ImageError, encode_image, read_image
+from ..imaging.images import ImageError, encode_image, file_orientation, read_image
 from ..inputs.sources import sources_from_directory
 from ..io.storage import Location
 from ..io.targets import Drawings
@@ -48,6 +48,7 @@ from .options import (
     images_argument,
     load_sidecar_option,
     make_output_directory,
+    orientation_option,
     raw_views_sidecar_option,
     report_error,
     resolve_format,
@@ -74,9 +75,11 @@ def _image_paths(images: tuple[Path | Location, ...]) -> list[Path | Location]:
     return paths
 
 
-def _sources(paths: list[Path], sidecar: Path | None, view_kwargs: dict[str, Any]):
+def _sources(paths: list[Path], sidecar: Path | None, view_kwargs: dict[str, Any],
+             exif_orientation: str):
     """Canonical views of ``paths``, with the parameters of ``sidecar`` and the options."""
-    return canonical_views(paths, load_sidecar_option(sidecar), view_defaults(view_kwargs))
+    return canonical_views(paths, load_sidecar_option(sidecar), view_defaults(view_kwargs),
+                           exif_orientation)
 
 
 def _start_drawings(draw: Path | None, inputs: list[Path]) -> Drawings | None:
@@ -161,12 +164,13 @@ def _min_length_px(view: CanonicalView, pixels: float, units: float | None) -> f
 @click.option("--orientation", type=click.Choice(ORIENTATIONS), default="all",
               show_default=True, help="Keep vertical or horizontal segments only (within "
                                       "5 degrees).")
+@functools.partial(orientation_option, names=("--exif-orientation",))
 @draw_option("lines")
 @format_option
 def lines(images: tuple[Path, ...], sidecar: Path | None, edge_threshold: float,
           theta_step: float, min_votes: int, max_gap: float, min_length: float,
-          min_length_units: float | None, orientation: str, draw: Path | None,
-          fmt: str | None, **view_kwargs: Any) -> None:
+          min_length_units: float | None, orientation: str, exif_orientation: str,
+          draw: Path | None, fmt: str | None, **view_kwargs: Any) -> None:
     """Straight segments (door boundaries) by the Hough transform on frontal views (Sec. 5.2.2).
 
     Edges: thin hysteresis edges of the smoothed 3x3 Sobel gradient, compensated for the
@@ -179,7 +183,7 @@ def lines(images: tuple[Path, ...], sidecar: Path | None, edge_threshold: float,
       gsrwt lines sample_data/views --sidecar sample_data/views/views.csv --orientation vertical
     """
     paths = _image_paths(images)
-    views = _sources(paths, sidecar, view_kwargs)
+    views = _sources(paths, sidecar, view_kwargs, exif_orientation)
     drawings = _start_drawings(draw, [*paths, *([sidecar] if sidecar else [])])
     writer = TableWriter(sys.stdout, LINES_COLUMNS, resolve_format(fmt))
     failures: list[Path] = []
@@ -235,11 +239,12 @@ def _parse_scales(text: str, steps: int) -> list[float]:
 @functools.partial(edge_threshold_option, default=DEFAULT_MATCH_THRESHOLD,
                    text="High hysteresis threshold of the edges (as for gsrwt lines), in the "
                         "template and the views.")
+@orientation_option
 @draw_option("matches")
 @format_option
 def match(images: tuple[Path, ...], templates: tuple[Path, ...], sidecar: Path | None,
           scales: str, scale_steps: int, min_score: float, max_matches: int,
-          edge_threshold: float, draw: Path | None, fmt: str | None,
+          edge_threshold: float, exif_orientation: str, draw: Path | None, fmt: str | None,
           **view_kwargs: Any) -> None:
     """Find objects (door knob, peek window) with the Generalized Hough Transform (Sec. 5.2.2).
 
@@ -258,12 +263,13 @@ def match(images: tuple[Path, ...], templates: tuple[Path, ...], sidecar: Path |
     models: list[tuple[Path, Template]] = []
     for path in templates:
         try:
-            grey = grey8(read_image(path))
+            turn = 1 if exif_orientation == "ignore" else file_orientation(path)
+            grey = grey8(read_image(path, orientation=turn))
             models.append((path, build_template(grey, edges=line_edges(grey, edge_threshold))))
         except (ImageError, ValueError) as error:
             raise InputError(f"--template {path}: {error}") from None
     paths = _image_paths(images)
-    views = _sources(paths, sidecar, view_kwargs)
+    views = _sources(paths, sidecar, view_kwargs, exif_orientation)
     drawings = _start_drawings(draw, [*paths, *templates, *([sidecar] if sidecar else [])])
     writer = TableWriter(sys.stdout, MATCH_COLUMNS, resolve_format(fmt))
     failures: list[Path] = []

@@ -312,9 +312,12 @@ def max_input_pixels_option(func: F) -> F:
 ORIENTATION_CHOICES = ("exif", "ignore")
 
 
-def orientation_option(func: F) -> F:
-    """``--orientation``: apply the EXIF orientation (default) or use the stored pixels."""
-    return click.option("--orientation", type=click.Choice(ORIENTATION_CHOICES),
+def orientation_option(func: F, names: tuple[str, ...] = ("--orientation",
+                                                          "--exif-orientation")) -> F:
+    """``--orientation`` (also ``--exif-orientation``; ``gsrwt lines``, whose
+    ``--orientation`` is the segments', only that), the ``exif_orientation`` parameter: apply
+    the EXIF orientation (default) or use the stored pixels."""
+    return click.option(*names, "exif_orientation", type=click.Choice(ORIENTATION_CHOICES),
                         default="exif", show_default=True,
                         help="exif: turn the photo as its EXIF orientation says, as viewers "
                              "show it (pan, tilt, roll, cx, cy and pixels are of the photo as "

@@ -612,7 +612,7 @@ def settings_from_options(outdir: Path | Location, options: dict[str, Any]
         describe=RectifyWording(bbox if isinstance(bbox, str) else "box",
                                 px_per_unit is not None, size_limit is not None),
         antialias=options.pop("antialias"),
-        orientation=options.pop("orientation"),
+        orientation=options.pop("exif_orientation"),
     )
     return settings, extension
 

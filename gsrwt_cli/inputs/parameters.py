@@ -63,9 +63,11 @@ class Found:
     where: str
     origin: Origin
 
-    def view(self) -> View:
-        """Validate into a :class:`View`; raises :class:`~gsrwt_cli.inputs.sidecar.RecordError`."""
-        return view_from_values(self.values, self.where)
+    def view(self, orientation: int = 1) -> View:
+        """Validate into a :class:`View` of the photo as its EXIF ``orientation`` displays it
+        (:func:`~gsrwt_cli.inputs.records.view_from_values`); raises
+        :class:`~gsrwt_cli.inputs.sidecar.RecordError`."""
+        return view_from_values(self.values, self.where, orientation)
 
 
 @dataclass(frozen=True)

@@ -206,3 +206,27 @@ def test_estimate_and_auto_see_the_displayed_photo(tmp_path):
     assert result.returncode == 0, result.stderr
     row = read_table(tmp_path / "auto.csv")[0]
     assert row["orientation"] == "8" and abs(float(row["pan_deg"]) - 40) < 0.5
+
+
+def test_lines_and_match_find_the_same_landmarks_on_a_turned_photo(tmp_path):
+    """A sample door view stored turned (tag 6): lines and match give the upright view's rows,
+    frontal and source pixels alike (the source pixels are the displayed photo's)."""
+    views = Path(__file__).resolve().parents[2] / "sample_data"
+    with Image.open(views / "views" / "door_p20_t-8_f800.jpg") as door:
+        upright = write_oriented(tmp_path / "upright.png", door.copy(), None)
+        turned = write_oriented(tmp_path / "turned.png", door.copy(), 6)
+    pose = ["--pan", "20", "--tilt", "-8", "--focal", "800", "--format", "csv"]
+
+    def rows(command: str, path: Path, *extra: str) -> list[dict]:
+        result = run_gsrwt(command, str(path), *pose, *extra)
+        assert result.returncode == 0, result.stderr
+        found = read_table(result.stdout)
+        assert found
+        return [{key: value for key, value in row.items() if key != "image"} for row in found]
+
+    knob = ["--template", str(views / "templates" / "knob.png")]
+    assert rows("lines", turned, "--orientation", "vertical") == rows(
+        "lines", upright, "--orientation", "vertical")
+    assert rows("match", turned, *knob) == rows("match", upright, *knob)
+    ignored = run_gsrwt("lines", str(turned), *pose, "--exif-orientation", "ignore")
+    assert ignored.stdout != run_gsrwt("lines", str(upright), *pose).stdout
