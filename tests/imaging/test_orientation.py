@@ -45,7 +45,8 @@ def test_no_exif_damaged_exif_and_invalid_values_are_upright(tmp_path):
 @pytest.mark.parametrize("orientation", range(1, 9))
 def test_pixels_are_turned_as_pillow_shows_them(tmp_path, orientation):
     """Pillow's own transpose of the file, against gsrwt's, for an RGB file; then the same
-    turn on other sample types and layouts (uint16, float32 grey, BGRA), index for index."""
+    turn on other sample types and layouts (uint16, float32 grey, BGRA, int16, float64
+    BGRA), index for index."""
     rng = np.random.default_rng(orientation)
     rgb = rng.integers(0, 256, (5, 7, 3), dtype=np.uint8)
     path = tmp_path / "photo.png"
@@ -58,7 +59,8 @@ def test_pixels_are_turned_as_pillow_shows_them(tmp_path, orientation):
     where = displayed_pixels(np.arange(35).reshape(5, 7), orientation)  # the stored index
     assert np.array_equal(displayed_pixels(rgb, orientation), shown)
     for pixels in (rgb.astype(np.uint16) * 257, rgb[..., 0].astype(np.float32) / 7,
-                   np.dstack([rgb, rgb[..., :1]])):
+                   np.dstack([rgb, rgb[..., :1]]), rgb.astype(np.int16) - 128,
+                   np.dstack([rgb, rgb[..., :1]]).astype(np.float64) / 3):
         turned = displayed_pixels(pixels, orientation)
         assert turned.flags.c_contiguous and turned.dtype == pixels.dtype
         flat = pixels.reshape(35, *pixels.shape[2:])
