@@ -190,7 +190,9 @@ def file_orientation(path: str | Path) -> int:
     """The EXIF orientation (1-8) of an image file, 1 when it has none or an invalid one
     (:func:`~gsrwt_cli.geometry.orientation.valid_orientation`): JPEG, PNG (``eXIf``), TIFF
     and WebP, read by Pillow (``Image.open`` reads the header, never the pixels); whatever
-    Pillow raises on a damaged file means 1."""
+    Pillow raises on a damaged file means 1. A PNG's ``eXIf`` is looked for before its pixels
+    only (where Pillow, ExifTool and ImageMagick write it): one after them would need the
+    pixels decoded (Pillow's ``getexif`` would decode them to find it)."""
     import warnings
 
     from PIL import Image  # Pillow only when an image is read
@@ -199,6 +201,8 @@ def file_orientation(path: str | Path) -> int:
         warnings.simplefilter("ignore")  # "Corrupt EXIF data", "Truncated File Read", ...
         try:
             with open_input(path) as handle, Image.open(handle) as image:
+                if image.format == "PNG" and "exif" not in image.info:
+                    return 1  # none before the pixels
                 value = image.getexif().get(ORIENTATION_TAG)
         except Exception:  # noqa: BLE001 - a damaged file of a third-party parser: upright
             return 1

@@ -76,3 +76,24 @@ def test_scratch_turns_a_jpeg_decoded_for_the_warp(tmp_path):
     turned = Scratch().read(path, orientation=6)
     assert turned.shape == (40, 30, 3)
     assert turned[:20, -10:].min() > 200 and turned[20:, :20].max() < 50  # now top-right
+
+
+def test_a_png_is_not_decoded_to_find_its_orientation(tmp_path):
+    """An ``eXIf`` chunk after the pixels is found only by decoding them (Pillow's
+    ``getexif`` would): not looked for, so a PNG without EXIF costs no decode."""
+    import struct
+    import zlib
+
+    path = tmp_path / "late.png"
+    Image.new("RGB", (40, 30)).save(path, exif=_exif(6))
+    data = path.read_bytes()
+    start = data.index(b"eXIf") - 4
+    length = struct.unpack(">I", data[start:start + 4])[0]
+    chunk = data[start:start + 12 + length]
+    assert zlib.crc32(chunk[4:-4]) == struct.unpack(">I", chunk[-4:])[0]
+    without = data[:start] + data[start + len(chunk):]
+    end = without.index(b"IEND") - 4
+    path.write_bytes(without[:end] + chunk + without[end:])  # eXIf moved after IDAT
+    with Image.open(path) as image:
+        assert image.getexif().get(ORIENTATION) == 6  # Pillow finds it, decoding the pixels
+    assert file_orientation(path) == 1
