@@ -69,7 +69,9 @@ class GuidedPose:
     rectangle's width over height (None without corners), ``aspect_estimated`` when told by
     the corners; ``rms_px``: the root mean square reprojection error of the points (0 when
     they determine the fit exactly); ``focal_relative_error``, ``aspect_relative_error``:
-    their standard errors for :data:`NOMINAL_POINT_ERROR_PX` on each point (0 when given).
+    their standard errors for :data:`NOMINAL_POINT_ERROR_PX` on each point (0 when given);
+    ``pose_standard_error_deg``: those of pan, tilt and roll (corners only; the whole
+    camera's pose, before the fit mode).
     """
 
     world_from_camera: Matrix
@@ -81,6 +83,7 @@ class GuidedPose:
     rms_px: float
     focal_relative_error: float = 0.0
     aspect_relative_error: float = 0.0
+    pose_standard_error_deg: tuple[float, float, float] | None = None
 
 
 # --------------------------------------------------------------------------------------------
@@ -219,15 +222,33 @@ def _levenberg_marquardt(residuals: Callable[[np.ndarray], np.ndarray], start: n
     return params, jacobian(params, r)
 
 
-def _relative_errors(j: np.ndarray, names: Sequence[str]) -> dict[str, float]:
-    """Standard errors of the free parameters (``log f``, ``log aspect``: relative errors)
-    for :data:`NOMINAL_POINT_ERROR_PX` on each coordinate: ``sigma^2 (J^T J)^-1``."""
+def _covariance(j: np.ndarray) -> np.ndarray:
+    """The free parameters' covariance for :data:`NOMINAL_POINT_ERROR_PX` on each
+    coordinate: ``sigma^2 (J^T J)^-1`` (infinite where they are not determined)."""
     try:
         covariance = np.linalg.inv(j.T @ j) * NOMINAL_POINT_ERROR_PX ** 2
-        errors = np.sqrt(np.maximum(np.diag(covariance), 0.0))
     except np.linalg.LinAlgError:
-        errors = np.full(len(names), np.inf)
+        covariance = np.full((j.shape[1], j.shape[1]), np.inf)
+    return covariance
+
+
+def _relative_errors(covariance: np.ndarray, names: Sequence[str]) -> dict[str, float]:
+    """Standard errors of the free parameters (``log f``, ``log aspect``: relative errors)."""
+    errors = np.sqrt(np.maximum(np.diag(covariance), 0.0))
     return {name: float(error) for name, error in zip(names, errors)}
+
+
+def _pose_errors(camera_from_world: Matrix, covariance: np.ndarray) -> tuple[float, ...]:
+    """Standard errors of pan, tilt and roll (degrees) from the covariance of the rotation
+    increment (its first three parameters), through the decomposition's Jacobian."""
+    def angles(rvec: np.ndarray) -> np.ndarray:
+        return np.array(list(pose_from_rotation((rotation_from_rvec(rvec) @ camera_from_world).T)))
+
+    base = angles(np.zeros(3))
+    step = 1e-7
+    jacobian = np.column_stack([(angles(step * e) - base) / step for e in np.eye(3)])
+    variances = np.diag(jacobian @ covariance[:3, :3] @ jacobian.T)
+    return tuple(float(v) for v in np.sqrt(np.maximum(variances, 0.0)))
 
 
 def _orthonormal(rows: np.ndarray) -> Matrix:
@@ -335,7 +356,8 @@ def pose_from_corners(corners: np.ndarray, focal: float | None = None,
         return (_corners_model(p, camera_from_world, fixed_focal, aspect) - points).ravel()
 
     params, jacobian = _levenberg_marquardt(residuals, np.array(start))
-    errors = _relative_errors(jacobian, names)
+    covariance = _covariance(jacobian)
+    errors = _relative_errors(covariance, names)
     rotation = rotation_from_rvec(params[:3]) @ camera_from_world
     index = 6
     found_focal = float(focal) if focal_given else math.exp(params[index])
@@ -352,7 +374,9 @@ def pose_from_corners(corners: np.ndarray, focal: float | None = None,
     return GuidedPose(world_from_camera, fitted_pose(world_from_camera, fit), found_focal,
                       not focal_given, found_aspect, aspect is None,
                       float(math.sqrt(np.mean(r.reshape(4, 2) ** 2) * 2)),
-                      errors.get("focal", 0.0), errors.get("aspect", 0.0))
+                      errors.get("focal", 0.0), errors.get("aspect", 0.0),
+                      _pose_errors(rotation, covariance)
+                      if np.all(np.isfinite(covariance)) else None)
 
 
 def _percent(relative: float) -> str:
