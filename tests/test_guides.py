@@ -88,7 +88,7 @@ def test_frontal_views_say_why_the_focal_length_cannot_be_told():
     with pytest.raises(GuideError, match="too frontal to tell the focal length; give --focal "
                                          "or --aspect") as caught:
         solve(shot, shot.corners, "estimated")
-    assert caught.value.field == "focal"
+    assert caught.value.field == "corners"
     with pytest.raises(GuideError, match="too frontal.*give --focal$"):
         solve(shot, shot.corners, "aspect given")
     found = solve(shot, shot.corners, "focal given")  # the aspect needs only the focal length

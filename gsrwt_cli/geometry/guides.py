@@ -383,13 +383,15 @@ def _percent(relative: float) -> str:
     return "infinity" if not math.isfinite(relative) else f"{100 * relative:.2g} %"
 
 
-def _frontal_error(aspect_given: bool, relative: float | None = None) -> GuideError:
+def _frontal_error(aspect_given: bool, relative: float | None = None,
+                   field: str = "corners") -> GuideError:
     """The view is too frontal to tell the focal length; what to give instead."""
     spread = "" if relative is None else (
         f" (±{_percent(relative)} for {NOMINAL_POINT_ERROR_PX:g} px of error on each point)")
-    instead = "give --focal" if aspect_given else "give --focal or --aspect"
-    return GuideError("focal", f"the view is too frontal to tell the focal length{spread}; "
-                               f"{instead}")
+    instead = ("give --focal" if aspect_given or field != "corners"
+               else "give --focal or --aspect")
+    return GuideError(field, f"the view is too frontal to tell the focal length{spread}; "
+                             f"{instead}")
 
 
 # --------------------------------------------------------------------------------------------
@@ -466,14 +468,14 @@ def pose_from_segments(verticals: np.ndarray | None, horizontals: np.ndarray | N
     relative = 0.0
     if not focal_given:
         if verticals is None or horizontals is None:
-            raise GuideError("focal", "the focal length cannot be told from guides of one "
-                                      "kind; give --focal, or verticals and horizontals both")
+            raise GuideError(needed[0], "the focal length cannot be told from guides of one "
+                                        "kind; give --focal, or verticals and horizontals both")
         focal = _focal_from_segments(verticals, horizontals)
         if focal is None:
-            raise _frontal_error(False)
+            raise _frontal_error(False, field="verticals")
         relative = _segments_focal_error(verticals, horizontals, focal)
         if not relative <= MAX_RELATIVE_ERROR:
-            raise _frontal_error(False, relative)
+            raise _frontal_error(False, relative, "verticals")
     up = right = None
     if verticals is not None:
         up = _direction(_interpretation_normals(verticals, focal))
