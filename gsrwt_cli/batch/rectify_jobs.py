@@ -33,8 +33,9 @@ from ..imaging.images import (
     measure_image_file,
 )
 from ..inputs.focal import with_focal
+from ..inputs.guides import has_guides
 from ..inputs.parameters import Found, NotFound, Problem, resolve_parameters
-from ..inputs.records import RecordError, view_from_values
+from ..inputs.records import RecordError, guided_view_values, view_from_values
 from ..inputs.sidecar import Sidecar
 from ..inputs.sources import Source
 from ..io.outputs import OutsideOutputError, check_inside, remove_stale_temporaries, write_atomic
@@ -147,12 +148,20 @@ def _view(job: Job, estimate: bool = True) -> tuple[View, str, dict[str, Any]]:
             raise JobError(str(error)) from None
         return view, found, {"pose_source": "estimated", "confidence": confidence}
     values, source = with_focal(job.source, job.values, job.where)
-    if source is None:
+    guided = has_guides(values)
+    if source is None and not guided:
         raise JobError(
             "no focal length: none in the parameters, no camera file, and no usable "
             "focal length in the image's EXIF"
         )
     try:
+        if guided:  # the pose the guides show; the focal length too when nothing gives one
+            if values.get("width") in (None, "") and values.get("cx") in (None, ""):
+                size = image_file_size(job.source)
+                if size is not None:
+                    values["width"], values["height"] = size
+            values, columns = guided_view_values(values, job.where)
+            source = columns.get("focal_source", source)
         return view_from_values(values, job.where), source, {"pose_source": job.pose_source}
     except RecordError as error:
         raise JobError(str(error)) from None

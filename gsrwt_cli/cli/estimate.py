@@ -28,6 +28,7 @@ from .options import (
     Number,
     PathOrUrl,
     field_options,
+    guide_options,
     jobs_option,
     load_sidecar_option,
     make_output_directory,
@@ -76,6 +77,7 @@ camera_options = field_options(
               help="CSV or YAML of per-image intrinsics (focal, cx, cy, camera, lens); any "
                    "pose in it is ignored.")
 @camera_options
+@guide_options
 @click.option("--min-confidence", type=Number(0, 1), default=0.0, show_default=True,
               help="Estimates less confident than this (0-1) are errors.")
 @click.option("--wall", type=click.Choice(WALL_CHOICES), default="frontal", show_default=True,

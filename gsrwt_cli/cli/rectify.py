@@ -80,6 +80,7 @@ from .options import (
     Integer,
     Number,
     PathOrUrl,
+    guide_options,
     interpolation_option,
     jobs_option,
     load_sidecar_option,
@@ -456,6 +457,7 @@ def dask_executor(address: str, processes: int, retries: int,
               help="CSV or YAML of per-image parameters (rows match by relative path or name); "
                    "a path or a URL.")
 @view_options
+@guide_options
 @click.option("--bbox", default="frontal", show_default=True,
               help="Output extent: frontal (the thesis's box, the input's size), full (the "
                    "visible wall, up to --max-stretch), crop (the largest rectangle of it with "

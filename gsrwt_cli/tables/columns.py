@@ -30,10 +30,11 @@ RECTIFY_STATUSES = ("ok", "skipped", "error", "interrupted", "planned")
 #: ``DIRECTION_NAMES``).
 VANISHING_DIRECTIONS = ("vertical", "wall", "normal")
 
-#: ``gsrwt estimate``: a sidecar row of the estimated camera, and the evidence.
+#: ``gsrwt estimate``: a sidecar row of the estimated camera, and the evidence (``aspect``,
+#: ``aspect_source``: the rectangle of ``--corners``, ``given`` or ``estimated``).
 ESTIMATE_COLUMNS = (
     "image", "pan", "tilt", "roll", "focal", "fx", "fy", "cx", "cy", "width", "height",
-    "confidence", "segments", "inliers", "focal_source",
+    "confidence", "segments", "inliers", "focal_source", "aspect", "aspect_source",
     *(f"vp_{name}_{axis}" for name in VANISHING_DIRECTIONS for axis in ("col", "row")),
     "status", "error",
 )
