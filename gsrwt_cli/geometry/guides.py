@@ -380,7 +380,9 @@ def pose_from_corners(corners: np.ndarray, focal: float | None = None,
 
 
 def _percent(relative: float) -> str:
-    return "infinity" if not math.isfinite(relative) else f"{100 * relative:.2g} %"
+    if not math.isfinite(relative):
+        return "infinity"
+    return f"{100 * relative:.0f} %" if relative >= 0.1 else f"{100 * relative:.2g} %"
 
 
 def _frontal_error(aspect_given: bool, relative: float | None = None,

@@ -1,0 +1,154 @@
+"""Guided correction through the real ``gsrwt`` command (subprocesses): ``estimate``,
+``rectify`` and ``params`` with ``--corners``, ``--aspect``, ``--verticals``,
+``--horizontals`` and ``--fit``, the sidecar columns, and bad guides."""
+
+from __future__ import annotations
+
+import csv
+import io
+
+import cv2
+import numpy as np
+import pytest
+from conftest import run_gsrwt
+from rectangle_renders import RectangleShot, rectangle_shot
+
+SHOT = rectangle_shot(25.0, -15.0, 5.0, 900.0, 1.5)
+
+
+def corners_text(shot: RectangleShot) -> str:
+    return " ".join(f"{col:.4f},{row:.4f}" for col, row in shot.corners)
+
+
+def segments_text(segments: np.ndarray) -> str:
+    return ";".join(",".join(f"{v:.4f}" for v in segment) for segment in segments)
+
+
+@pytest.fixture(scope="module")
+def photo(tmp_path_factory) -> str:
+    """A grey 1024x768 PNG with the rectangle painted in (the guides are given, not found)."""
+    path = tmp_path_factory.mktemp("guides") / "shot.png"
+    image = np.full((SHOT.height, SHOT.width, 3), 120, np.uint8)
+    cv2.fillConvexPoly(image, np.round(SHOT.corners).astype(np.int32), (230, 230, 230))
+    cv2.imwrite(str(path), image)
+    return str(path)
+
+
+def rows(text: str) -> list[dict[str, str]]:
+    return list(csv.DictReader(io.StringIO(text)))
+
+
+def pose_of(row: dict[str, str], suffix: str = "") -> np.ndarray:
+    return np.array([float(row[f"{name}{suffix}"]) for name in ("pan", "tilt", "roll")])
+
+
+def rectified_corners(row: dict[str, str], corners: np.ndarray) -> np.ndarray:
+    homography = np.array([float(v) for v in row["homography"].split()]).reshape(3, 3)
+    mapped = np.column_stack([corners, np.ones(len(corners))]) @ homography.T
+    return mapped[:, :2] / mapped[:, 2:]
+
+
+def test_estimate_corners_writes_pose_focal_and_aspect(photo):
+    done = run_gsrwt("estimate", photo, "--corners", corners_text(SHOT), "-f", "csv")
+    assert done.returncode == 0, done.stderr
+    [row] = rows(done.stdout)
+    assert np.max(np.abs(pose_of(row) - [25.0, -15.0, 5.0])) < 0.01
+    assert abs(float(row["focal"]) / 900.0 - 1) < 1e-3
+    assert abs(float(row["aspect"]) / 1.5 - 1) < 1e-3
+    assert (row["focal_source"], row["aspect_source"], row["status"]) == (
+        "estimated", "estimated", "ok")
+    given = rows(run_gsrwt("estimate", photo, "--corners", corners_text(SHOT), "--aspect",
+                           "3:2", "--focal", "900", "-f", "csv").stdout)[0]
+    assert (given["focal_source"], given["aspect_source"], given["aspect"]) == (
+        "option", "given", "1.5")
+    assert np.max(np.abs(pose_of(given) - [25.0, -15.0, 5.0])) < 0.01
+
+
+def test_guides_give_the_corners_pose_with_ends_in_either_order(photo):
+    verticals, horizontals = SHOT.sides()
+    for order in ([0, 1, 2, 3], [2, 3, 0, 1]):
+        done = run_gsrwt("estimate", photo, "--verticals", segments_text(verticals[:, order]),
+                         "--horizontals", segments_text(horizontals[::-1, order]), "-f", "csv")
+        assert done.returncode == 0, done.stderr
+        [row] = rows(done.stdout)
+        assert np.max(np.abs(pose_of(row) - [25.0, -15.0, 5.0])) < 0.3
+        assert abs(float(row["focal"]) / 900.0 - 1) < 1e-2
+        assert row["aspect"] == "" and row["focal_source"] == "estimated"
+
+
+def test_rectify_frames_the_rectangle_upright_from_options_and_from_estimate(photo, tmp_path):
+    done = run_gsrwt("rectify", photo, "--corners", corners_text(SHOT), "-o",
+                     str(tmp_path / "direct"), "-q", "-j", "1")
+    assert done.returncode == 0, done.stderr
+    estimated = run_gsrwt("estimate", photo, "--corners", corners_text(SHOT), "-o",
+                          str(tmp_path / "poses.csv"), "-q")
+    assert estimated.returncode == 0, estimated.stderr
+    piped = run_gsrwt("rectify", photo, "--sidecar", str(tmp_path / "poses.csv"), "-o",
+                      str(tmp_path / "piped"), "-q", "-j", "1")
+    assert piped.returncode == 0, piped.stderr
+    for name in ("direct", "piped"):
+        [row] = rows((tmp_path / name / "gsrwt.csv").read_text())
+        assert row["status"] == "ok" and row["focal_source"] == (
+            "estimated" if name == "direct" else "sidecar")
+        tl, tr, br, bl = rectified_corners(row, SHOT.corners)
+        assert abs(tl[1] - tr[1]) < 0.5 and abs(bl[1] - br[1]) < 0.5
+        assert abs(tl[0] - bl[0]) < 0.5 and abs(tr[0] - br[0]) < 0.5
+        assert abs((tr[0] - tl[0]) / (bl[1] - tl[1]) / 1.5 - 1) < 1e-3
+
+
+def test_sidecar_columns_give_guides(photo, tmp_path):
+    sidecar = tmp_path / "guides.csv"
+    sidecar.write_text('image,corners,focal,fit\n'
+                       f'shot.png,"{corners_text(SHOT)}",900,vertical\n')
+    done = run_gsrwt("rectify", photo, "--sidecar", str(sidecar), "-o", str(tmp_path / "out"),
+                     "-q", "-j", "1")
+    assert done.returncode == 0, done.stderr
+    [row] = rows((tmp_path / "out" / "gsrwt.csv").read_text())
+    assert float(row["pan_deg"]) == 0.0  # --fit vertical: the horizontal perspective stays
+    assert abs(float(row["tilt_deg"]) + 15.0) < 0.01
+    tl, tr, br, bl = rectified_corners(row, SHOT.corners)
+    assert abs(tl[0] - bl[0]) < 0.01 and abs(tr[0] - br[0]) < 0.01  # verticals vertical
+    assert abs((bl[1] - tl[1]) / (br[1] - tr[1]) - 1) > 0.1  # horizontals still converge
+
+
+def test_params_takes_guides():
+    done = run_gsrwt("params", "--corners", corners_text(SHOT), "--width", "1024", "--height",
+                     "768", "-f", "csv")
+    assert done.returncode == 0, done.stderr
+    [row] = rows(done.stdout)
+    assert np.max(np.abs(pose_of(row, "_deg") - [25.0, -15.0, 5.0])) < 0.01
+    assert abs(float(row["focal_px"]) / 900 - 1) < 1e-3
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--corners", "1,2 30,4 50,60"], "option --corners: need 4 corners"),
+    (["--corners", "0,0 0,100 100,100 100,0"], "option --corners: the corners go "
+                                                "counter-clockwise"),
+    (["--corners", "0,0 100,0 0,100 100,100"], "option --corners: the corners are not a "
+                                                "convex quadrilateral"),
+    (["--corners", "a,b 1,2 3,4 5,6"], "option --corners: 'a,b' is not a point"),
+    (["--verticals", "0,0,0,100"], "option --verticals: need two or more vertical segments"),
+    (["--horizontals", "0,0,100,0;5,5,5"], "option --horizontals: '5,5,5' is not a segment"),
+    (["--aspect", "3:0"], "option --aspect: the aspect ratio is W:H or one positive number"),
+    (["--corners", "312,191 712,188 715,590 310,593"],
+     "option --corners: the view is too frontal to tell the focal length"),
+    (["--verticals", "0,0,1,100;100,0,101,100"], "option --horizontals: --fit both needs two "
+                                                 "or more horizontals (or corners); with "
+                                                 "verticals alone give --fit vertical"),
+])
+def test_bad_guides_are_one_line_naming_the_option(args, message):
+    done = run_gsrwt("params", *args, "--width", "1024", "--height", "768")
+    assert done.returncode == 2
+    assert done.stderr.count("\n") == 1 and "Traceback" not in done.stderr
+    assert message in done.stderr, done.stderr
+
+
+def test_a_bad_guide_in_a_sidecar_fails_its_image_naming_the_row(photo, tmp_path):
+    sidecar = tmp_path / "bad.csv"
+    sidecar.write_text('image,corners\nshot.png,"312,191 712,188 715,590 310,593"\n')
+    done = run_gsrwt("estimate", photo, "--sidecar", str(sidecar), "-f", "csv")
+    assert done.returncode == 1
+    [row] = rows(done.stdout)
+    assert row["status"] == "error"
+    assert "line 2, field 'corners': the view is too frontal" in row["error"]
+    assert "give --focal or --aspect" in row["error"]
