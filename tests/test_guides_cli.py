@@ -152,3 +152,39 @@ def test_a_bad_guide_in_a_sidecar_fails_its_image_naming_the_row(photo, tmp_path
     assert row["status"] == "error"
     assert "line 2, field 'corners': the view is too frontal" in row["error"]
     assert "give --focal or --aspect" in row["error"]
+
+
+@pytest.mark.parametrize("extra", [[], ["--aspect", "3:2", "--focal", "900"],
+                                   ["--max-size", "400x400"]])
+def test_bbox_corners_frames_the_rectangle_upright(photo, tmp_path, extra):
+    """``--bbox corners --margin 5``: the corners land on an axis-aligned rectangle of the
+    aspect within 0.5 px, 5 % of its sides from the output's edges, and the output shows the
+    painted rectangle there."""
+    done = run_gsrwt("rectify", photo, "--corners", corners_text(SHOT), "--bbox", "corners",
+                     "--margin", "5", *extra, "-o", str(tmp_path / "out"), "-q", "-j", "1")
+    assert done.returncode == 0, done.stderr
+    [row] = rows((tmp_path / "out" / "gsrwt.csv").read_text())
+    tl, tr, br, bl = rectified_corners(row, SHOT.corners)
+    assert abs(tl[1] - tr[1]) < 0.5 and abs(bl[1] - br[1]) < 0.5
+    assert abs(tl[0] - bl[0]) < 0.5 and abs(tr[0] - br[0]) < 0.5
+    width, height = tr[0] - tl[0], bl[1] - tl[1]
+    assert abs(width / height - 1.5) < 0.5 / height * 3
+    out_width, out_height = int(row["out_width"]), int(row["out_height"])
+    assert abs((tl[0] + 0.5) - 0.05 * width) < 1.5 and abs((tl[1] + 0.5) - 0.05 * height) < 1.5
+    assert abs(out_width / (1.1 * width) - 1) < 0.01
+    if extra == ["--max-size", "400x400"]:
+        assert out_width <= 400 and out_height <= 400
+    else:  # the rectangle keeps its pixels: its longest side as long as in the input
+        assert width >= np.max(np.linalg.norm(SHOT.corners[[1, 2]] - SHOT.corners[[0, 3]],
+                                              axis=1)) - 1
+    image = cv2.imread(str(tmp_path / "out" / "shot.png"))
+    inside = image[int(tl[1]) + 3:int(bl[1]) - 3, int(tl[0]) + 3:int(tr[0]) - 3]
+    assert inside.min() > 200
+    assert image[: max(1, int(tl[1]) - 3)].max() < 150
+
+
+def test_bbox_corners_needs_corners(photo, tmp_path):
+    done = run_gsrwt("rectify", photo, "--pan", "10", "--tilt", "5", "--focal", "900",
+                     "--bbox", "corners", "-o", str(tmp_path / "out"), "-q", "-j", "1")
+    assert done.returncode == 1
+    assert "--bbox corners needs the rectangle's corners" in done.stderr

@@ -33,7 +33,7 @@ from ..imaging.images import (
     measure_image_file,
 )
 from ..inputs.focal import with_focal
-from ..inputs.guides import has_guides
+from ..inputs.guides import has_guides, parse_corners
 from ..inputs.parameters import Found, NotFound, Problem, resolve_parameters
 from ..inputs.records import RecordError, guided_view_values, view_from_values
 from ..inputs.sidecar import Sidecar
@@ -183,6 +183,19 @@ NOT_MADE_SO = ("its output exists, not made with these options (no valid row of 
 NOT_A_FILE = "its output exists and is not a regular file; remove it or use another -o"
 
 
+def _framed(job: Job, settings: Settings) -> Settings:
+    """The settings of one image: with ``--bbox corners``, its corners in the framing."""
+    if settings.framing.bbox != "corners":
+        return settings
+    text = (job.values or {}).get("corners")
+    if text in (None, ""):
+        raise JobError("--bbox corners needs the rectangle's corners (--corners, or a "
+                       "corners column) for this image")
+    corners = parse_corners(str(text))
+    framing = replace(settings.framing, corners=tuple(map(tuple, corners.tolist())))
+    return replace(settings, framing=framing)
+
+
 def _plan(view: View, width: int, height: int, settings: Settings) -> Plan:
     return plan_image(view, width, height, settings.framing)
 
@@ -216,7 +229,7 @@ def process_job(job: Job, settings: Settings, scratch: Scratch | None = None) ->
             if not job.source.is_file():
                 raise JobError("no such file" if not job.source.exists() else "not a file")
             width, height = measure_image_file(job.source, settings.max_input_pixels)
-            info = _plan(view, width, height, settings)  # refuses big outputs undecoded
+            info = _plan(view, width, height, _framed(job, settings))  # big outputs refused
             image = scratch.read(job.source, settings.max_input_pixels)
             dtype, channels = image.dtype, 1 if image.ndim == 2 else image.shape[2]
             del image  # the scratch holds it for the warp
@@ -257,7 +270,7 @@ def record_row(job: Job, settings: Settings, status: str = "ok") -> dict[str, An
             view, source, pose = _view(job)
             row.update(params_row(view, str(job.source)), focal_source=source, **pose)
             size = measure_image_file(job.source, settings.max_input_pixels)
-            info = _plan(view, size[0], size[1], settings)
+            info = _plan(view, size[0], size[1], _framed(job, settings))
         row.update(_geometry(info), image=str(job.source), status=status,
                    made_with=_made_with(job, settings))
         existing = image_file_size(job.output)

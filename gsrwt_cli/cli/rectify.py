@@ -95,9 +95,9 @@ from .options import (
 
 
 def parse_bbox(text: str) -> str | tuple[float, float, float, float]:
-    """``frontal``, ``full``, ``crop`` or ``X0,Y0,X1,Y1`` (default-frame pixels, X1 > X0,
-    Y1 > Y0)."""
-    if text in ("frontal", "full", "crop"):
+    """``frontal``, ``full``, ``crop``, ``corners`` or ``X0,Y0,X1,Y1`` (default-frame
+    pixels, X1 > X0, Y1 > Y0)."""
+    if text in ("frontal", "full", "crop", "corners"):
         return text
     parts = text.split(",")
     try:
@@ -106,7 +106,8 @@ def parse_bbox(text: str) -> str | tuple[float, float, float, float]:
         box = ()
     if len(box) != 4 or not all(math.isfinite(v) for v in box):
         raise click.BadParameter(
-            f"expected frontal, full, crop or X0,Y0,X1,Y1 (four numbers), got {quote(text)}",
+            f"expected frontal, full, crop, corners or X0,Y0,X1,Y1 (four numbers), got "
+            f"{quote(text)}",
             param_hint="'--bbox'",
         )
     if box[2] <= box[0] or box[3] <= box[1]:
@@ -461,7 +462,11 @@ def dask_executor(address: str, processes: int, retries: int,
 @click.option("--bbox", default="frontal", show_default=True,
               help="Output extent: frontal (the thesis's box, the input's size), full (the "
                    "visible wall, up to --max-stretch), crop (the largest rectangle of it with "
-                   "no fill) or X0,Y0,X1,Y1 in default-frame pixels.")
+                   "no fill), corners (the rectangle of --corners, at a resolution that keeps "
+                   "its pixels) or X0,Y0,X1,Y1 in default-frame pixels.")
+@click.option("--margin", type=Number(min=0), default=0.0, show_default=True,
+              help="With --bbox corners: room around the rectangle, in percent of its width "
+                   "and height.")
 @click.option("--max-stretch", type=Number(), default=4.0, show_default=True,
               help="With --bbox full or crop: stop where the image is magnified more than "
                    "this many times the magnification at its centre.")
@@ -600,7 +605,7 @@ def settings_from_options(outdir: Path | Location, options: dict[str, Any]
         framing=Framing(bbox=bbox, scale=scale or 1.0, px_per_unit=px_per_unit,
                         max_stretch=max_stretch,
                         max_pixels=parse_pixel_count(options.pop("max_pixels"), "--max-pixels"),
-                        max_size=size_limit),
+                        max_size=size_limit, margin=options.pop("margin")),
         interpolation=options.pop("interpolation"), fill=options.pop("fill"), alpha=alpha,
         quality=options.pop("quality"), overwrite=options.pop("overwrite"),
         dry_run=options.pop("dry_run"),
