@@ -106,7 +106,7 @@ def parse_bbox(text: str) -> str | tuple[float, float, float, float]:
         box = ()
     if len(box) != 4 or not all(math.isfinite(v) for v in box):
         raise click.BadParameter(
-            f"expected frontal, full, crop, corners or X0,Y0,X1,Y1 (four numbers), got "
+            f"expected frontal, full, crop or X0,Y0,X1,Y1 (four numbers), or corners; got "
             f"{quote(text)}",
             param_hint="'--bbox'",
         )
