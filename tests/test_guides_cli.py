@@ -188,3 +188,20 @@ def test_bbox_corners_needs_corners(photo, tmp_path):
                      "--bbox", "corners", "-o", str(tmp_path / "out"), "-q", "-j", "1")
     assert done.returncode == 1
     assert "--bbox corners needs the rectangle's corners" in done.stderr
+
+
+def test_estimate_pipes_into_rectify_through_standard_input(photo, tmp_path):
+    """``gsrwt estimate ... | gsrwt rectify --sidecar -``: CSV or YAML on standard input."""
+    estimated = run_gsrwt("estimate", photo, "--corners", corners_text(SHOT), "-q")
+    assert estimated.returncode == 0, estimated.stderr
+    yaml_text = "- image: shot.png\n  pan: 25\n  tilt: -15\n  roll: 5\n  focal: 900\n"
+    for name, text in (("csv", estimated.stdout), ("yaml", yaml_text)):
+        done = run_gsrwt("rectify", photo, "--sidecar", "-", "-o", str(tmp_path / name), "-q",
+                         "-j", "1", stdin=text)
+        assert done.returncode == 0, done.stderr
+        [row] = rows((tmp_path / name / "gsrwt.csv").read_text())
+        assert np.max(np.abs(pose_of(row, "_deg") - [25.0, -15.0, 5.0])) < 0.01
+    both = run_gsrwt("rectify", "-", "--sidecar", "-", "-o", str(tmp_path / "both"),
+                     stdin=photo + "\n")
+    assert both.returncode == 2
+    assert "--sidecar - and INPUT - cannot both read standard input" in both.stderr

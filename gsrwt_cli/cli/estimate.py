@@ -74,8 +74,8 @@ camera_options = field_options(
                    "terminal, csv in a pipe].")
 @click.option("-r", "--recursive", is_flag=True, help="Descend into directories.")
 @click.option("--sidecar", type=PathOrUrl(dir_okay=False),
-              help="CSV or YAML of per-image intrinsics (focal, cx, cy, camera, lens); any "
-                   "pose in it is ignored.")
+              help="CSV or YAML of per-image intrinsics (focal, cx, cy, camera, lens) or "
+                   "guides (- for standard input); any pose in it is ignored.")
 @camera_options
 @guide_options
 @click.option("--min-confidence", type=Number(0, 1), default=0.0, show_default=True,
@@ -113,6 +113,8 @@ def estimate(inputs: tuple[str, ...], output: str | None, fmt: str | None, recur
                                      "or .md, or give --format", param_hint="'-o'")
     else:
         table_format, output = resolve_format(fmt), "-"
+    if str(sidecar) == "-" and "-" in inputs:
+        raise InputError("--sidecar - and INPUT - cannot both read standard input")
     loaded = load_sidecar_option(sidecar)
     if camera.get("camera"):
         try:

@@ -129,13 +129,20 @@ def view_from_options(values: dict[str, Any]) -> View:
 
 
 def load_sidecar_option(sidecar: Path | None) -> Sidecar | None:
-    """The ``--sidecar`` the user named, loaded (None without one), or an
-    :class:`InputError` saying what is wrong with the file."""
+    """The ``--sidecar`` the user named, loaded (None without one; ``-``: standard input),
+    or an :class:`InputError` saying what is wrong with the file."""
     if sidecar is None:
         return None
-    from ..inputs.sidecar import SidecarError, load_sidecar
+    from ..inputs.sidecar import SidecarError, load_sidecar, sidecar_from_text
 
     try:
+        if str(sidecar) == "-":  # a pipe: gsrwt estimate ... | gsrwt rectify --sidecar -
+            data = click.get_binary_stream("stdin").read()
+            try:
+                return sidecar_from_text(data.decode("utf-8"))
+            except UnicodeDecodeError as error:
+                raise InputError(f"--sidecar -: standard input is not UTF-8 text "
+                                 f"({error.reason})") from None
         return load_sidecar(sidecar)
     except SidecarError as error:
         raise InputError(str(error)) from None

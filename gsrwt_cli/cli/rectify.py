@@ -456,7 +456,7 @@ def dask_executor(address: str, processes: int, retries: int,
               help="Descend into directories and mirror their tree under OUTDIR.")
 @click.option("--sidecar", type=PathOrUrl(dir_okay=False),
               help="CSV or YAML of per-image parameters (rows match by relative path or name); "
-                   "a path or a URL.")
+                   "a path, a URL, or - for standard input.")
 @view_options
 @guide_options
 @click.option("--bbox", default="frontal", show_default=True,
@@ -673,6 +673,8 @@ def plan_batch(inputs: tuple[str, ...], outdir: Path | Location, recursive: bool
     """Every check before any image is read: the inputs listed, the sidecar and --camera
     read, nothing the user gave us overwritten, the output directory and table writable;
     then the jobs planned (one shard's), and stale temporaries of a killed run removed."""
+    if str(sidecar) == "-" and "-" in inputs:
+        raise InputError("--sidecar - and INPUT - cannot both read standard input")
     loaded = load_sidecar_option(sidecar)
     sources, unreadable = collect_sources(inputs, recursive)
     if not sources and not unreadable:
