@@ -96,8 +96,10 @@ def estimate(inputs: tuple[str, ...], output: str | None, fmt: str | None, recur
 
     Writes one sidecar row per image: image, pan, tilt, roll, focal, cx, cy, width,
     height (what 'gsrwt rectify --sidecar' reads), then confidence, segments, inliers,
-    focal_source, the three vanishing points in pixels, status and error. Images that
-    cannot tell their pose get status error and no pose. Exit code 1 if any failed.
+    focal_source, aspect and aspect_source, the three vanishing points in pixels, status and
+    error. Images that cannot tell their pose get status error and no pose. With guides
+    (--corners, --verticals, --horizontals) the pose is the one they show. Exit code 1 if
+    any failed.
 
     \b
     Examples:
