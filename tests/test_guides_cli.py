@@ -205,3 +205,19 @@ def test_estimate_pipes_into_rectify_through_standard_input(photo, tmp_path):
                      stdin=photo + "\n")
     assert both.returncode == 2
     assert "--sidecar - and INPUT - cannot both read standard input" in both.stderr
+
+
+def test_estimate_writes_a_yaml_sidecar_that_rectify_reads(photo, tmp_path):
+    poses = tmp_path / "poses.yaml"
+    done = run_gsrwt("estimate", photo, "--corners", corners_text(SHOT), "-o", str(poses), "-q")
+    assert done.returncode == 0, done.stderr
+    import yaml
+
+    [record] = yaml.safe_load(poses.read_text())
+    assert record["image"] == "shot.png" and record["aspect_source"] == "estimated"
+    assert abs(record["pan"] - 25.0) < 0.01 and "confidence" not in record
+    done = run_gsrwt("rectify", photo, "--sidecar", str(poses), "-o", str(tmp_path / "out"),
+                     "-q", "-j", "1")
+    assert done.returncode == 0, done.stderr
+    [row] = rows((tmp_path / "out" / "gsrwt.csv").read_text())
+    assert np.max(np.abs(pose_of(row, "_deg") - [25.0, -15.0, 5.0])) < 0.01

@@ -20,7 +20,7 @@ from ..inputs.sidecar import SidecarError, display_path
 from ..io.storage import location
 from ..io.targets import Drawings, file_identity, protected_files
 from ..tables.columns import ESTIMATE_COLUMNS
-from ..tables.writer import FORMATS, TableWriter, format_from_extension
+from ..tables.writer import FORMATS, TableWriter, YamlRecordWriter, format_from_extension
 from .options import (
     VIEW_OPTIONS,
     InputError,
@@ -67,8 +67,8 @@ camera_options = field_options(
 @click.command()
 @click.argument("inputs", nargs=-1, required=True, metavar="INPUT...")
 @click.option("-o", "--output", "output", default=None,
-              help="Write the table to this file (.csv, .tsv, .json, .jsonl, .md) instead of "
-                   "stdout; it is a sidecar for 'gsrwt rectify --sidecar'.")
+              help="Write the table to this file (.csv, .tsv, .json, .jsonl, .md, .yaml) "
+                   "instead of stdout; it is a sidecar for 'gsrwt rectify --sidecar'.")
 @click.option("--format", "-f", "fmt", type=click.Choice(FORMATS), default=None,
               help="Table format [default: from -o's extension; on stdout table on a "
                    "terminal, csv in a pipe].")
@@ -110,9 +110,11 @@ def estimate(inputs: tuple[str, ...], output: str | None, fmt: str | None, recur
     input_pixel_limit = parse_pixel_count(max_input_pixels, "--max-input-pixels")
     if output is not None and output != "-":
         table_format = fmt or format_from_extension(output) or ""
-        if table_format not in FORMATS or table_format == "table" and fmt is None:
-            raise click.BadParameter("the table's name must end in .csv, .tsv, .json, .jsonl "
-                                     "or .md, or give --format", param_hint="'-o'")
+        if fmt is None and output.lower().endswith((".yaml", ".yml")):
+            table_format = "yaml"  # a YAML sidecar
+        elif table_format not in FORMATS or table_format == "table" and fmt is None:
+            raise click.BadParameter("the table's name must end in .csv, .tsv, .json, .jsonl, "
+                                     ".md or .yaml, or give --format", param_hint="'-o'")
     else:
         table_format, output = resolve_format(fmt), "-"
     if str(sidecar) == "-" and "-" in inputs:
@@ -163,7 +165,9 @@ def estimate(inputs: tuple[str, ...], output: str | None, fmt: str | None, recur
     progress = tqdm(total=len(job_list), unit="img", file=sys.stderr, dynamic_ncols=True,
                     disable=quiet or not sys.stderr.isatty())
     with stop_on_signals(), open_table(output) as stream:
-        writer = TableWriter(stream, ESTIMATE_COLUMNS, table_format)
+        writer: TableWriter | YamlRecordWriter = (
+            YamlRecordWriter(stream, ESTIMATE_COLUMNS) if table_format == "yaml"
+            else TableWriter(stream, ESTIMATE_COLUMNS, table_format))
 
         def on_row(row: dict[str, Any]) -> None:
             writer.write_row(row)
