@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import csv
 import io
+from pathlib import Path
 
 import cv2
 import numpy as np
@@ -221,3 +222,18 @@ def test_estimate_writes_a_yaml_sidecar_that_rectify_reads(photo, tmp_path):
     assert done.returncode == 0, done.stderr
     [row] = rows((tmp_path / "out" / "gsrwt.csv").read_text())
     assert np.max(np.abs(pose_of(row, "_deg") - [25.0, -15.0, 5.0])) < 0.01
+
+
+def test_fit_vertical_on_a_real_photo_makes_the_clicked_verticals_vertical(tmp_path):
+    """OpenCV's building.jpg with two verticals clicked by eye (docs/COMMANDS.md): after
+    ``--fit vertical`` both run straight down the output, and pan is left as it was."""
+    photo = Path(__file__).parent / "data" / "facade" / "building.jpg"
+    verticals = np.array([[151, 140, 150, 370], [751, 70, 761, 300]], dtype=float)
+    done = run_gsrwt("rectify", str(photo), "--verticals", segments_text(verticals),
+                     "--fit", "vertical", "--focal", "1245", "-o", str(tmp_path / "out"),
+                     "-q", "-j", "1")
+    assert done.returncode == 0, done.stderr
+    [row] = rows((tmp_path / "out" / "gsrwt.csv").read_text())
+    assert float(row["pan_deg"]) == 0.0
+    ends = rectified_corners(row, verticals.reshape(-1, 2)).reshape(-1, 4)
+    assert np.all(np.abs(ends[:, 0] - ends[:, 2]) < 0.01)
