@@ -237,3 +237,18 @@ def test_fit_vertical_on_a_real_photo_makes_the_clicked_verticals_vertical(tmp_p
     assert float(row["pan_deg"]) == 0.0
     ends = rectified_corners(row, verticals.reshape(-1, 2)).reshape(-1, 4)
     assert np.all(np.abs(ends[:, 0] - ends[:, 2]) < 0.01)
+
+
+def test_a_row_with_its_own_pose_or_guides_takes_none_of_the_options_other_kind(tmp_path):
+    """Options fill what a sidecar row leaves out: a row with a pose takes no --corners, a
+    row with corners takes no --pan/--tilt (and neither is an error)."""
+    sidecar = tmp_path / "mixed.csv"
+    sidecar.write_text(f'image,pan,tilt,corners\nposed.png,10,5,\nguided.png,,,'
+                       f'"{corners_text(SHOT)}"\n')
+    for extra in (["--corners", corners_text(SHOT)], ["--pan", "1", "--tilt", "2"]):
+        done = run_gsrwt("params", "--sidecar", str(sidecar), "--focal", "900", "--width",
+                         "1024", "--height", "768", *extra, "-f", "csv")
+        assert done.returncode == 0, done.stderr
+        posed, guided = rows(done.stdout)
+        assert (float(posed["pan_deg"]), float(posed["tilt_deg"])) == (10.0, 5.0)
+        assert np.max(np.abs(pose_of(guided, "_deg") - [25.0, -15.0, 5.0])) < 0.01

@@ -70,7 +70,9 @@ def merge_values(own: Mapping[str, Any], *fallbacks: Mapping[str, Any]) -> dict[
     """``own`` values over the ``fallbacks`` (earlier ones win over later ones).
 
     A record that gives the pose as the GS-RWT's ``delta``/``a`` takes no pan or tilt from
-    the fallbacks, and one that gives pan/tilt takes no ``delta``, ``a`` or ``gamma``.
+    the fallbacks, and one that gives pan/tilt takes no ``delta``, ``a`` or ``gamma``; one
+    that gives a pose takes no guides (``corners``, ``verticals``, ``horizontals``,
+    ``aspect``), and one that gives guides takes no pan, tilt, roll, delta, a or gamma.
     """
     if not any(fallbacks):  # nothing to fall back on (a sidecar's row alone, most often)
         return dict(own)
@@ -83,6 +85,12 @@ def merge_values(own: Mapping[str, Any], *fallbacks: Mapping[str, Any]) -> dict[
         merged.pop("tilt", None)
     elif own_keys & {"pan", "tilt"}:
         for name in GSRWT_FIELDS:
+            merged.pop(name, None)
+    if own_keys & {"pan", "tilt", "delta", "a", *RVEC_FIELDS, *QUATERNION_FIELDS}:
+        for name in GUIDE_FIELDS[:-1]:  # a pose of its own: the options' guides are not its
+            merged.pop(name, None)
+    elif own_keys & set(GUIDE_FIELDS):
+        for name in ("pan", "tilt", "roll", *GSRWT_FIELDS):  # guides of its own: their pose
             merged.pop(name, None)
     merged.update(own)
     return merged
