@@ -252,3 +252,27 @@ def test_a_row_with_its_own_pose_or_guides_takes_none_of_the_options_other_kind(
         posed, guided = rows(done.stdout)
         assert (float(posed["pan_deg"]), float(posed["tilt_deg"])) == (10.0, 5.0)
         assert np.max(np.abs(pose_of(guided, "_deg") - [25.0, -15.0, 5.0])) < 0.01
+
+
+def test_corners_through_a_lens_give_the_pose(tmp_path):
+    """Corners rendered through OpenCV's plumb_bob lens (k1 = -0.2): with the lens in the
+    sidecar the corners are undistorted first and give the pose exactly; without it they
+    do not."""
+    from rectangle_renders import project
+
+    k1 = -0.2
+    pinhole = project(SHOT.world_corners(), SHOT.pan, SHOT.tilt, SHOT.roll, SHOT.focal, SHOT.cx,
+                      SHOT.cy)
+    rays = np.column_stack([(pinhole - [SHOT.cx, SHOT.cy]) / SHOT.focal, np.ones(4)])
+    matrix = np.array([[SHOT.focal, 0, SHOT.cx], [0, SHOT.focal, SHOT.cy], [0, 0, 1.0]])
+    distorted = cv2.projectPoints(rays.reshape(-1, 1, 3), np.zeros(3), np.zeros(3), matrix,
+                                  np.array([k1, 0, 0, 0, 0.0]))[0].reshape(-1, 2)
+    text = " ".join(f"{col:.4f},{row:.4f}" for col, row in distorted)
+    sidecar = tmp_path / "lens.csv"
+    sidecar.write_text(f'image,corners,focal,k1,width,height\nwith.png,"{text}",900,{k1},1024,'
+                       f'768\nwithout.png,"{text}",900,,1024,768\n')
+    done = run_gsrwt("params", "--sidecar", str(sidecar), "-f", "csv")
+    assert done.returncode == 0, done.stderr
+    with_lens, without = rows(done.stdout)
+    assert np.max(np.abs(pose_of(with_lens, "_deg") - [25.0, -15.0, 5.0])) < 0.01
+    assert np.max(np.abs(pose_of(without, "_deg") - [25.0, -15.0, 5.0])) > 0.5
