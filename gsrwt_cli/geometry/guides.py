@@ -480,15 +480,16 @@ def pose_from_segments(verticals: np.ndarray | None, horizontals: np.ndarray | N
             raise _frontal_error(False, relative, "verticals")
     up = right = None
     if verticals is not None:
-        up = _direction(_interpretation_normals(verticals, focal))
+        up = _refine_direction(verticals, _direction(_interpretation_normals(verticals, focal)),
+                               focal)
         up = up if up[0] >= 0 else -up  # the image is roughly upright: up is up
     if horizontals is not None:
-        right = _direction(_interpretation_normals(horizontals, focal))
+        right = _refine_direction(
+            horizontals, _direction(_interpretation_normals(horizontals, focal)), focal)
         right = right if right[1] >= 0 else -right
     if up is not None and right is not None:
-        world_from_camera = _rotation_from_directions(
-            _interpretation_normals(verticals, focal), _interpretation_normals(horizontals, focal),
-            up, right)
+        assert verticals is not None and horizontals is not None
+        world_from_camera = _rotation_from_directions(verticals, horizontals, up, right, focal)
     elif up is not None:  # tilt and roll: Rx(pan) leaves the first row alone
         tilt = math.degrees(math.asin(max(-1.0, min(1.0, up[2]))))
         roll = math.degrees(math.atan2(-up[1], up[0]))
@@ -508,17 +509,45 @@ def _pose_rotation(pan: float, tilt: float, roll: float) -> Matrix:
     return rotation_from_pose(pan, tilt, roll)
 
 
-def _rotation_from_directions(vertical_normals: np.ndarray, horizontal_normals: np.ndarray,
-                              up: np.ndarray, right: np.ndarray) -> Matrix:
-    """The rotation whose up and right axes (rows of ``world_from_camera``) are orthogonal
-    to the segments' interpretation planes in the least-squares sense, from ``up``, ``right``."""
+def _end_distances(segments: np.ndarray, direction: np.ndarray, focal: float) -> np.ndarray:
+    """How far (pixels) each segment's first end lies from the line through the segment's
+    midpoint and the vanishing point of ``direction`` (camera frame; the point
+    ``(f d_X, f d_Y, d_Z)``, at infinity included): the geometric error of a vanishing
+    point, the same at both ends."""
+    vanishing = np.array([focal * direction[0], focal * direction[1], direction[2]])
+    middles = (segments[:, :2] + segments[:, 2:]) / 2
+    lines = np.cross(np.column_stack([middles, np.ones(len(segments))]), vanishing)
+    lines = lines / np.hypot(lines[:, 0], lines[:, 1])[:, None]
+    return lines[:, 0] * segments[:, 0] + lines[:, 1] * segments[:, 1] + lines[:, 2]
+
+
+def _refine_direction(segments: np.ndarray, start: np.ndarray, focal: float) -> np.ndarray:
+    """The direction whose vanishing point the segments meet in, least squares of
+    :func:`_end_distances` from ``start`` (over the plane tangent to it)."""
+    start = start / np.linalg.norm(start)
+    basis = np.linalg.svd(start[None, :])[2][1:]  # two unit vectors orthogonal to start
+
+    def direction(p: np.ndarray) -> np.ndarray:
+        moved = start + p @ basis
+        return moved / np.linalg.norm(moved)
+
+    params, _ = _levenberg_marquardt(lambda p: _end_distances(segments, direction(p), focal),
+                                     np.zeros(2))
+    return direction(params)
+
+
+def _rotation_from_directions(verticals: np.ndarray, horizontals: np.ndarray,
+                              up: np.ndarray, right: np.ndarray, focal: float) -> Matrix:
+    """The rotation whose up and right axes (rows of ``world_from_camera``) the vertical and
+    horizontal segments meet in, least squares of :func:`_end_distances`, from ``up`` and
+    ``right`` (made orthogonal)."""
     axes = np.array([up, right, np.cross(up, right)])
     camera_from_world = _orthonormal(axes.T)
 
     def residuals(p: np.ndarray) -> np.ndarray:
         rotation = rotation_from_rvec(p) @ camera_from_world
-        return np.concatenate([vertical_normals @ rotation[:, 0],
-                               horizontal_normals @ rotation[:, 1]])
+        return np.concatenate([_end_distances(verticals, rotation[:, 0], focal),
+                               _end_distances(horizontals, rotation[:, 1], focal)])
 
     params, _ = _levenberg_marquardt(residuals, np.zeros(3))
     return (rotation_from_rvec(params) @ camera_from_world).T
