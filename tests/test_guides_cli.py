@@ -276,3 +276,20 @@ def test_corners_through_a_lens_give_the_pose(tmp_path):
     with_lens, without = rows(done.stdout)
     assert np.max(np.abs(pose_of(with_lens, "_deg") - [25.0, -15.0, 5.0])) < 0.01
     assert np.max(np.abs(pose_of(without, "_deg") - [25.0, -15.0, 5.0])) > 0.5
+
+
+def test_fit_vertical_applies_to_auto(tmp_path):
+    """``rectify --auto --fit vertical``: the estimated pose with its pan set to 0 (the
+    same tilt and roll as ``--auto`` alone)."""
+    photo = Path(__file__).parent.parent / "sample_data" / "views" / "door_p40_t-12_f700.jpg"
+    found = {}
+    for fit in ("both", "vertical"):
+        done = run_gsrwt("rectify", str(photo), "--auto", "--fit", fit, "-o",
+                         str(tmp_path / fit), "-q", "-j", "1")
+        assert done.returncode == 0, done.stderr
+        [found[fit]] = rows((tmp_path / fit / "gsrwt.csv").read_text())
+    assert abs(float(found["both"]["pan_deg"]) - 40) < 2
+    assert float(found["vertical"]["pan_deg"]) == 0.0
+    for name in ("tilt_deg", "roll_deg"):
+        assert float(found["vertical"][name]) == pytest.approx(float(found["both"][name]),
+                                                                abs=1e-6)
