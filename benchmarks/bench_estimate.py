@@ -2,7 +2,7 @@
 
 ``--images`` renders of textured box rooms and corridors (doors, windows, clutter; noise, blur,
 JPEG), 640x480, pans up to 40 degrees either way, tilts of both signs, rolls up to 10, made by
-``tests/estimate_scenes.py`` through OpenCV's own camera; each is estimated with its known
+``tests/helpers/estimate_scenes.py`` through OpenCV's own camera; each is estimated with its known
 focal length on one core (OpenCV on one thread), the best CPU time of ``--repeat`` runs
 taken (the machine's cores are shared: wall time measures the neighbours). Errors
 are angles between directions (docs/CONVENTIONS.md): estimated vs true vertical and wall normal.
@@ -27,11 +27,11 @@ one_blas_thread()  # numpy as the gsrwt command runs it (cli.run)
 import cv2  # noqa: E402
 import numpy as np  # noqa: E402
 
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
-from estimate_scenes import Shot, angle_between, random_shots  # noqa: E402
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))  # the tests' helpers
 
 from gsrwt_cli.api.estimate import estimate_pose  # noqa: E402
 from gsrwt_cli.geometry.camera import Intrinsics  # noqa: E402
+from tests.helpers.estimate_scenes import Shot, angle_between, random_shots  # noqa: E402
 
 GOALS = {"vertical": (0.6, 1.5), "normal": (0.7, 1.5)}  # median, 90th percentile (degrees)
 #: The lens of the third pass: a mild wide angle (OpenCV's plumb_bob k1), that the estimator

@@ -1,7 +1,7 @@
 """Accuracy of guided correction (``--corners``, ``--verticals``/``--horizontals``) against
 noise on the clicked points, on rectangles rendered through OpenCV's own camera.
 
-``--shots`` rectangles (``tests/rectangle_renders.py``: 1024x768, pans up to 40 degrees, tilts
+``--shots`` rectangles (``tests/helpers/rectangles.py``: 1024x768, pans up to 40 degrees, tilts
 up to 30, rolls up to 15, focal lengths 600-1600 px, aspect ratios 0.5-2, the rectangle 40-70 %
 of the image's height), with Gaussian noise of each standard deviation on every corner
 coordinate, solved three ways: focal length and aspect ratio both estimated, the focal length
@@ -27,14 +27,17 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
-from rectangle_renders import RectangleShot, least_squares_pose, random_shots  # noqa: E402
-
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))  # the tests' helpers
 from gsrwt_cli.geometry.guides import (  # noqa: E402
     GuideError,
     image_points,
     pose_from_corners,
     pose_from_segments,
+)
+from tests.helpers.rectangles import (  # noqa: E402
+    RectangleShot,
+    least_squares_pose,
+    random_shots,
 )
 
 NOISES = (0.0, 0.25, 0.5, 1.0, 2.0)

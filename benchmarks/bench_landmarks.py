@@ -1,6 +1,6 @@
 """Landmarks on real photos and realistic renders: recall, precision and time of ``gsrwt lines``.
 
-Three labelled sets (see ``tests/chessboard_edges.py`` and ``tests/door_renders.py``):
+Three labelled sets (see ``tests/helpers/chessboard_edges.py`` and ``door_renders.py``):
 OpenCV's 13 chessboard photos rectified with their solvePnP poses (every square's sides
 known from ``cv2.findChessboardCorners`` on the raw photo), the same photos at 15 % contrast
 with noise and JPEG, and rendered doors (a white frame on a white wall among them) at pans up
@@ -28,14 +28,12 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
-
-import chessboard_edges  # noqa: E402
-import door_renders  # noqa: E402
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))  # the tests' helpers
 
 from gsrwt_cli.vision.edges import FILL_MARGIN, line_edges  # noqa: E402
 from gsrwt_cli.vision.frontal_pixels import frontal_edges, seen  # noqa: E402
 from gsrwt_cli.vision.landmarks import EdgeMap, hough_lines  # noqa: E402
+from tests.helpers import chessboard_edges, door_renders  # noqa: E402
 
 
 def frontal_stage(board, compensate: bool = True) -> EdgeMap:

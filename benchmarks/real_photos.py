@@ -1,7 +1,7 @@
 """Measures of the pose estimator on real photos with a known orientation (York Urban DB).
 
 Pure functions, no I/O: the runner is ``benchmarks/bench_real_photos.py``, and
-``tests/test_real_photo_eval.py`` checks these functions on the data's own values.
+``tests/api/test_real_photo_eval.py`` checks these functions on the data's own values.
 
 The measures are those of the data's README (``../shared/data/york-urban-train/README.md``):
 

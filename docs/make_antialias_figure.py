@@ -18,7 +18,7 @@ ROOT = Path(__file__).resolve().parent.parent
 
 
 def fine_texture(height: int, width: int) -> np.ndarray:
-    """Stripes and noise at the pixel scale (as tests/test_real_cameras.py makes them)."""
+    """Stripes and noise at the pixel scale (as tests/geometry/test_real_cameras.py makes them)."""
     rng = np.random.default_rng(5)
     cols, rows = np.meshgrid(np.arange(width), np.arange(height))
     stripes = 127 + 100 * np.sin(cols * 2.6 + rows * 0.9) * np.cos(rows * 2.1)

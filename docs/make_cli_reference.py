@@ -1,6 +1,6 @@
 """Write docs/CLI.md: every gsrwt command's ``--help``, word for word, at a fixed width.
 
-Run from anywhere: ``python docs/make_cli_reference.py``. ``tests/test_docs.py`` regenerates
+Run from anywhere: ``python docs/make_cli_reference.py``. ``tests/docs/test_docs.py`` regenerates
 the text and fails when docs/CLI.md differs, so the page always says what the commands say.
 """
 

@@ -8,8 +8,8 @@ CPUs' last bits may fall on either side), and such flips must be rare. Everythin
 compared to the letter (whitespace runs of the aligned formats as one space, since a flipped
 ``0.5`` / ``0.499999`` changes a column's width).
 
-Remake them after an intended change with ``python tests/test_golden_tables.py`` and review
-the diff.
+Remake them after an intended change with ``python -m tests.test_golden_tables`` (from the
+project's root) and review the diff.
 """
 
 from __future__ import annotations
@@ -20,12 +20,11 @@ import sys
 from pathlib import Path
 
 import pytest
-from click.testing import CliRunner
 
-from gsrwt_cli.cli import main
+from tests.helpers.cli import run_gsrwt
+from tests.helpers.paths import DATA, ROOT
 
-ROOT = Path(__file__).resolve().parent.parent
-GOLDEN = ROOT / "tests" / "data" / "golden"
+GOLDEN = DATA / "golden"
 FORMATS = ("table", "csv", "tsv", "json", "jsonl", "markdown")
 #: Decimals printed by the machine formats and by the human ones (table, markdown).
 DECIMALS = {"table": 3, "markdown": 3}
@@ -53,16 +52,15 @@ def _sample_copy(where: Path) -> Path:
     return where
 
 
-def produce(name: str, fmt: str, where: Path, monkeypatch: pytest.MonkeyPatch) -> str:
+def produce(name: str, fmt: str, where: Path) -> str:
     """The table ``name`` (a command, or ``rectify``) in ``fmt``, made in ``where``."""
-    monkeypatch.chdir(where)
     if name == "rectify":
         shutil.rmtree(where / "out", ignore_errors=True)
-        result = CliRunner().invoke(main, [*RECTIFY, "--table", f"table.{fmt}"])
-        assert result.exit_code == 0, result.output
+        result = run_gsrwt(*RECTIFY, "--table", f"table.{fmt}", cwd=where)
+        assert result.returncode == 0, result.stderr
         return (where / f"table.{fmt}").read_text()
-    result = CliRunner().invoke(main, [*COMMANDS[name], "--format", fmt])
-    assert result.exit_code in (0, 1), result.output
+    result = run_gsrwt(*COMMANDS[name], "--format", fmt, cwd=where)
+    assert result.returncode in (0, 1), result.stderr
     return result.stdout
 
 
@@ -99,8 +97,8 @@ CASES += [("rectify", fmt) for fmt in RECTIFY_FORMATS]
 
 @pytest.mark.slow
 @pytest.mark.parametrize(("name", "fmt"), CASES)
-def test_each_table_prints_as_its_golden_file(tmp_path, monkeypatch, name, fmt):
-    got = produce(name, fmt, _sample_copy(tmp_path), monkeypatch)
+def test_each_table_prints_as_its_golden_file(tmp_path, name, fmt):
+    got = produce(name, fmt, _sample_copy(tmp_path))
     golden = (GOLDEN / f"{name}.{fmt}").read_text()
     assert_prints_like(got, golden, fmt, f"{name}.{fmt}")
 
@@ -122,10 +120,8 @@ if __name__ == "__main__":  # remake the golden files
     import tempfile
 
     GOLDEN.mkdir(parents=True, exist_ok=True)
-    patch = pytest.MonkeyPatch()
     for name, fmt in CASES:
         with tempfile.TemporaryDirectory() as folder:
-            text = produce(name, fmt, _sample_copy(Path(folder)), patch)
+            text = produce(name, fmt, _sample_copy(Path(folder)))
         (GOLDEN / f"{name}.{fmt}").write_text(text)
         print(f"{name}.{fmt}: {len(text)} characters", file=sys.stderr)
-    patch.undo()

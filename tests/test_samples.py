@@ -2,22 +2,19 @@
 
 from __future__ import annotations
 
-import csv
-import io
-import subprocess
-import sys
-from pathlib import Path
-
 import cv2
 import numpy as np
 import pytest
-from conftest import camera_axes, psnr
 
 from gsrwt_cli import View
 from gsrwt_cli.geometry.framing import local_stretch, output_from_input
+from tests.helpers.camera import camera_axes
+from tests.helpers.cli import run_gsrwt
+from tests.helpers.images import psnr
+from tests.helpers.paths import SAMPLE_DATA as SAMPLES
+from tests.helpers.tables import read_table
 
-SAMPLES = Path(__file__).resolve().parent.parent / "sample_data"
-VIEWS = list(csv.DictReader(io.StringIO((SAMPLES / "views" / "views.csv").read_text())))
+VIEWS = read_table(SAMPLES / "views" / "views.csv")
 
 
 def test_sample_folder_is_small_and_complete():
@@ -35,9 +32,9 @@ def test_sample_folder_is_small_and_complete():
 
 
 def test_sample_views_are_what_render_makes_of_the_texture(tmp_path):
-    subprocess.run([sys.executable, "-m", "gsrwt_cli", "render", str(SAMPLES / "corridor_wall.png"),
-                    "--sidecar", str(SAMPLES / "views" / "views.csv"), "-o", str(tmp_path),
-                    "--quality", "90"], check=True)
+    result = run_gsrwt("render", str(SAMPLES / "corridor_wall.png"), "--sidecar",
+                       str(SAMPLES / "views" / "views.csv"), "-o", str(tmp_path), "--quality", "90")
+    assert result.returncode == 0, result.stderr
     for row in VIEWS:
         ours = cv2.imread(str(tmp_path / row["image"])).astype(int)
         committed = cv2.imread(str(SAMPLES / "views" / row["image"])).astype(int)
@@ -46,9 +43,9 @@ def test_sample_views_are_what_render_makes_of_the_texture(tmp_path):
 
 @pytest.mark.slow
 @pytest.mark.parametrize("row", VIEWS, ids=[row["image"] for row in VIEWS])
-def test_rectified_samples_give_back_the_texture(row, tmp_path, gsrwt):
-    result = gsrwt("rectify", str(SAMPLES / "views" / row["image"]), "--sidecar",
-                   str(SAMPLES / "views" / "views.csv"), "-o", str(tmp_path), "-q")
+def test_rectified_samples_give_back_the_texture(row, tmp_path):
+    result = run_gsrwt("rectify", str(SAMPLES / "views" / row["image"]), "--sidecar",
+                       str(SAMPLES / "views" / "views.csv"), "-o", str(tmp_path), "-q")
     assert result.returncode == 0, result.stderr
     output = cv2.imread(str(tmp_path / row["image"]))
     texture = cv2.imread(str(SAMPLES / "corridor_wall.png"))

@@ -15,6 +15,7 @@ import click
 import pytest
 
 from gsrwt_cli.cli import BLAS_THREAD_VARIABLES, COMMANDS, main
+from tests.helpers.cli import run_gsrwt
 
 HEAVY = ("numpy", "cv2", "yaml", "tqdm", "PIL", "imagesize")
 
@@ -66,8 +67,8 @@ def test_the_group_help_of_each_command_is_its_docstrings(name):
 
 
 def test_the_group_help_lists_every_command():
-    result = subprocess.run([sys.executable, "-m", "gsrwt_cli", "--help"], capture_output=True,
-                            text=True, check=True)
+    result = run_gsrwt("--help")
+    assert result.returncode == 0, result.stderr
     listed = [line.split()[0] for line in result.stdout.split("Commands:", 1)[1].splitlines()
               if line.strip()]
     assert listed == sorted(COMMANDS)

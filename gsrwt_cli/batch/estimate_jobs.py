@@ -17,7 +17,14 @@ from typing import Any
 
 import numpy as np
 
-from ..api.estimate import DIRECTION_NAMES, WALL_CHOICES, EstimateError, PoseEstimate, estimate_pose
+from ..api.estimate import (
+    DEFAULT_MIN_CONFIDENCE,
+    DIRECTION_NAMES,
+    WALL_CHOICES,
+    EstimateError,
+    PoseEstimate,
+    estimate_pose,
+)
 from ..geometry.camera import Intrinsics
 from ..imaging.images import (
     DEFAULT_MAX_INPUT_PIXELS,
@@ -51,7 +58,7 @@ class EstimateOptions:
     ``frontal`` (``|pan| <= 45``) or ``dominant`` (:func:`~gsrwt_cli.api.estimate.
     world_from_camera_of`)."""
 
-    min_confidence: float = 0.0
+    min_confidence: float = DEFAULT_MIN_CONFIDENCE
     wall: str = "frontal"
     max_input_pixels: float = DEFAULT_MAX_INPUT_PIXELS
 
@@ -96,8 +103,12 @@ def checked(estimate: PoseEstimate, options: EstimateOptions) -> None:
     if not estimate.ok:
         raise EstimateError(estimate.error)
     if estimate.confidence < options.min_confidence:
+        why = f"another orientation fits the lines {estimate.rival:.0%} as well"
+        if estimate.focal_uncertainty is not None:
+            why += (f"; the focal length's uncertainty turns the pose by "
+                    f"{estimate.focal_uncertainty.degrees:.1f} deg")
         raise EstimateError(f"confidence {estimate.confidence:.2f} is below the minimum "
-                             f"{options.min_confidence:g}")
+                            f"{options.min_confidence:g} ({why})")
 
 
 def estimated_values(estimate: PoseEstimate, camera: Intrinsics | None, width: int,

@@ -10,7 +10,7 @@ from typing import Any
 import click
 from tqdm import tqdm
 
-from ..api.estimate import WALL_CHOICES
+from ..api.estimate import DEFAULT_MIN_CONFIDENCE, WALL_CHOICES
 from ..base.messages import one_line
 from ..batch.estimate_jobs import EstimateJob, EstimateOptions, run_estimates
 from ..batch.rectify_jobs import worker_context
@@ -78,8 +78,11 @@ camera_options = field_options(
                    "guides (- for standard input); any pose in it is ignored.")
 @camera_options
 @guide_options
-@click.option("--min-confidence", type=Number(0, 1), default=0.0, show_default=True,
-              help="Estimates less confident than this (0-1) are errors.")
+@click.option("--min-confidence", type=Number(0, 1), default=DEFAULT_MIN_CONFIDENCE,
+              show_default=True,
+              help="Estimates less confident than this are errors; the confidence is the "
+                   "chance (0-1) that the pose is within 2 degrees, calibrated on real "
+                   "photos. 0 keeps every estimate the image can make.")
 @click.option("--wall", type=click.Choice(WALL_CHOICES), default="frontal", show_default=True,
               help="Which vertical plane is the wall: the most frontal (|pan| <= 45) or the "
                    "one with the most horizontal edges.")

@@ -29,7 +29,7 @@ from typing import IO, Any
 import click
 from tqdm import tqdm
 
-from ..api.estimate import WALL_CHOICES
+from ..api.estimate import DEFAULT_MIN_CONFIDENCE, WALL_CHOICES
 from ..base.messages import one_line, quote
 from ..base.numerals import parse_decimal, parse_whole
 from ..batch.estimate_jobs import EstimateOptions
@@ -516,8 +516,10 @@ def dask_executor(address: str, processes: int, retries: int,
 @click.option("--auto", is_flag=True,
               help="Estimate the pose of images that no source gives pan and tilt for, from "
                    "their own lines (as 'gsrwt estimate'; the focal length too if unknown).")
-@click.option("--min-confidence", type=Number(0, 1), default=0.0, show_default=True,
-              help="With --auto: estimates less confident than this (0-1) are errors.")
+@click.option("--min-confidence", type=Number(0, 1), default=DEFAULT_MIN_CONFIDENCE,
+              show_default=True,
+              help="With --auto: estimates less confident than this are errors (as "
+                   "'gsrwt estimate': the chance, 0-1, that the pose is within 2 degrees).")
 @click.option("--wall", type=click.Choice(WALL_CHOICES), default="dominant", show_default=True,
               help="With --auto: the wall to rectify is the vertical plane with the most "
                    "horizontal edges (the surface the photo shows) or the most frontal one "

@@ -11,7 +11,7 @@
 The board has 9x6 inner corners. Its object frame is OpenCV's, as ``solvePnP`` returns it:
 x along a row of corners (the order ``findChessboardCorners`` gives), y along a column, z into
 the board, origin at the first corner; one unit is one square (the photos do not say how
-large a square is), so ``tvec`` is in squares. ``tests/test_calibration.py`` reruns
+large a square is), so ``tvec`` is in squares. ``tests/inputs/test_calibration.py`` reruns
 :func:`calibrate` and compares it with the committed files.
 """
 

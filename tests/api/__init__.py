@@ -1,0 +1,1 @@
+"""Tests of ``gsrwt_cli/api/``: one image in memory: rectify it, estimate its pose."""

@@ -1,0 +1,122 @@
+"""The pixel map (``geometry/pixelmap.py``) against OpenCV's own camera: output pixels mapped to
+the input through the camera built from words and ``cv2.projectPoints`` (or
+``cv2.fisheye.projectPoints``), and back through the lens; the shrink by finite differences;
+the region beyond the horizon where the camera's plane meets the wall."""
+
+from __future__ import annotations
+
+import math
+
+import cv2
+import numpy as np
+import pytest
+
+from gsrwt_cli.geometry.camera import View
+from gsrwt_cli.geometry.framing import Framing, plan_output
+from gsrwt_cli.geometry.lens import Lens
+from gsrwt_cli.geometry.pixelmap import PixelMap
+from tests.helpers.camera import camera_axes
+
+DISTANCE = 10.0
+WIDTH, HEIGHT, FOCAL = 640, 480, 500.0
+LENSES = {
+    "plumb_bob": Lens("plumb_bob", (("k1", -0.12), ("k2", 0.03), ("p1", 0.001),
+                                    ("p2", -0.0005), ("k3", -0.004))),
+    "rational": Lens("rational_polynomial", (("k1", 0.3), ("k2", -0.05), ("k4", 0.35),
+                                             ("k5", -0.02))),
+    "fisheye": Lens("equidistant", (("k1", 0.05), ("k2", -0.01), ("k3", 0.002))),
+}
+
+
+def opencv_pixels(view: View, default: np.ndarray) -> np.ndarray:
+    """Camera pixels of default-frame pixels: the wall point each shows (Fig. 5.7, the words
+    of docs/CONVENTIONS.md), seen by OpenCV's camera with the view's lens."""
+    up, right, forward = camera_axes(view.pan, view.tilt)
+    axis = DISTANCE * forward[:2] / forward[2]
+    unit = DISTANCE / view.focal
+    wall = axis + np.column_stack([view.cy - default[:, 1], default[:, 0] - view.cx]) * unit
+    points = np.column_stack([wall, np.full(len(wall), DISTANCE)])
+    # OpenCV's camera frame: x right, y down, z forward.
+    in_camera = np.column_stack([points @ right, -(points @ up), points @ forward])
+    k = view.intrinsics.matrix()
+    coefficients = view.intrinsics.lens.opencv_coefficients()
+    zero = np.zeros(3)
+    if view.intrinsics.lens.is_fisheye:
+        pixels, _ = cv2.fisheye.projectPoints(in_camera[:, None, :], zero, zero, k,
+                                              coefficients)
+    else:
+        pixels, _ = cv2.projectPoints(in_camera, zero, zero, k, coefficients)
+    return pixels.reshape(-1, 2)
+
+
+def output_grid(size: tuple[int, int], count: int = 9) -> np.ndarray:
+    cols, rows = np.meshgrid(np.linspace(0, size[0] - 1, count),
+                             np.linspace(0, size[1] - 1, count))
+    return np.column_stack([cols.ravel(), rows.ravel()])
+
+
+@pytest.mark.parametrize("name", LENSES)
+def test_output_pixels_map_to_where_opencvs_camera_sees_their_wall_point(name):
+    """The default frame of a view through each lens model: ``to_input`` is OpenCV's
+    projection of the wall point the output pixel shows (within 1e-6 px), and ``to_output``
+    brings OpenCV's pixel back to the output pixel (the lens inverted)."""
+    view = View(20, -12, FOCAL, width=WIDTH, height=HEIGHT, lens=LENSES[name])
+    plan = plan_output(view)
+    outputs = output_grid(plan.size)
+    expected = opencv_pixels(view, outputs)  # the default frame: output = default pixel
+    inside = np.all((expected > 0) & (expected < [WIDTH - 1, HEIGHT - 1]), axis=1)
+    assert inside.sum() > 40
+    np.testing.assert_allclose(plan.pixel_map.to_input(outputs), expected, atol=1e-6)
+    back = plan.pixel_map.to_output(expected[inside])
+    np.testing.assert_allclose(back, outputs[inside], atol=1e-6)
+
+
+def test_the_shrink_is_the_largest_singular_value_of_the_maps_jacobian():
+    """``PixelMap.shrink``: input pixels per output pixel, against central differences of
+    ``to_input`` (a pinhole's map at half scale, panned so that the near side of the wall is
+    magnified and the far side shrunk: the values checked span a range)."""
+    view = View(50, 20, 400, width=WIDTH, height=HEIGHT)
+    pixel_map = plan_output(view, Framing(scale=0.5)).pixel_map
+    step = 16
+    shrink = pixel_map.shrink(step)
+    width, height = pixel_map.size
+    cols = np.arange(0, width + step - 1, step, dtype=float).clip(max=width - 1)
+    rows = np.arange(0, height + step - 1, step, dtype=float).clip(max=height - 1)
+    assert shrink.shape == (len(rows), len(cols))
+    h = 1e-3
+    for i in range(0, len(rows), 3):
+        for j in range(0, len(cols), 3):
+            point = np.array([[cols[j], rows[i]]])
+            jacobian = np.column_stack([
+                (pixel_map.to_input(point + [h, 0]) - pixel_map.to_input(point - [h, 0]))[0],
+                (pixel_map.to_input(point + [0, h]) - pixel_map.to_input(point - [0, h]))[0],
+            ]) / (2 * h)
+            largest = np.linalg.svd(jacobian, compute_uv=False)[0]
+            assert shrink[i, j] == pytest.approx(largest, rel=1e-5)
+    assert shrink.min() < 1 and shrink.max() > 2
+
+
+def test_the_region_beyond_the_horizon_starts_where_the_camera_plane_meets_the_wall():
+    """A camera panned 80 degrees sees the wall to its side; the plane through the camera
+    at right angles to its axis meets the wall ``Zc cot(pan)`` to the right of the foot of
+    the perpendicular, and the axis meets it ``Zc tan(pan)`` to the left: in the default
+    frame that is column ``cx + f (cot pan + tan pan)``. A frame reaching past it has that
+    region beyond the horizon (``beyond_horizon``), and only there are sources behind the
+    camera (``w <= 0``); a view facing the wall has no such region."""
+    pan, focal = 80.0, 280.0
+    view = View(pan, 0, focal, width=320, height=240)
+    pixel_map = plan_output(view, Framing(bbox=(0, 0, 2400, 240))).pixel_map
+    edge = view.cx + focal * (1 / math.tan(math.radians(pan)) + math.tan(math.radians(pan)))
+    polygon = pixel_map.beyond_horizon()
+    assert polygon is not None
+    assert polygon[:, 0].min() == pytest.approx(edge, abs=1e-6)
+    assert polygon[:, 0].max() == pytest.approx(2400 - 0.5)
+    assert sorted(set(polygon[:, 1])) == [-0.5, 239.5]
+    inverse = np.linalg.inv(np.asarray(pixel_map.output_from_input, dtype=float))
+    cols = np.array([edge - 50, edge - 1, edge + 1, edge + 50])
+    w = np.column_stack([cols, np.full(4, 120.0), np.ones(4)]) @ inverse[2]
+    assert (w[:2] > 0).all() and (w[2:] < 0).all()
+    facing = PixelMap(np.eye(3), (320, 240))
+    assert facing.beyond_horizon() is None and facing.sees((320, 240))
+    assert not facing.then(np.array([[1.0, 0, -1000], [0, 1, 0], [0, 0, 1]]),
+                           (100, 100)).sees((320, 240))

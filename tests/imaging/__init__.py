@@ -1,0 +1,1 @@
+"""Tests of ``gsrwt_cli/imaging/``: decoding every sample type, warping, encoding."""

@@ -1,0 +1,2 @@
+"""Tests of ``gsrwt_cli/inputs/``: input files, records, sidecars, calibration files, EXIF,
+which source of parameters wins."""
