@@ -12,6 +12,7 @@ __version__ = "0.1.0"
 _API = {
     "Framing": "geometry.framing",
     "GsrwtParameters": "geometry.gsrwt",
+    "GuidedPose": "geometry.guides",
     "Intrinsics": "geometry.camera",
     "Lens": "geometry.camera",
     "Plan": "geometry.framing",
@@ -23,6 +24,8 @@ _API = {
     "gsrwt_parameters": "geometry.gsrwt",
     "load_camera": "inputs.calibration",
     "plan_image": "api.rectify",
+    "pose_from_corners": "geometry.guides",
+    "pose_from_segments": "geometry.guides",
     "read_image": "imaging.images",
     "rectify_image": "api.rectify",
     "render_view": "batch.render_jobs",

@@ -26,14 +26,23 @@ from ..api.estimate import (
     estimate_pose,
 )
 from ..geometry.camera import Intrinsics
+from ..geometry.orientation import displayed_size
 from ..imaging.images import (
     DEFAULT_MAX_INPUT_PIXELS,
     encode_image,
     file_orientation,
+    image_file_size,
     read_image,
 )
 from ..inputs.focal import with_focal
-from ..inputs.records import GSRWT_FIELDS, POSE_FIELDS, SENSOR_FIELDS, view_from_values
+from ..inputs.guides import fit_pose, has_guides
+from ..inputs.records import (
+    GSRWT_FIELDS,
+    POSE_FIELDS,
+    SENSOR_FIELDS,
+    guided_view_values,
+    view_from_values,
+)
 from ..io.outputs import write_atomic
 from ..tables.columns import ESTIMATE_COLUMNS  # noqa: F401  (named here too)
 from .executor import ProcessExecutor
@@ -156,6 +165,33 @@ def estimate_row(estimate: PoseEstimate, source: str) -> dict[str, Any]:
     return row
 
 
+def guided_row(path: Path, values: Mapping[str, Any], where: str, orientation: int = 1
+               ) -> dict[str, Any]:
+    """The row of an image whose pose its guides show (``estimate --corners`` and the
+    like): the pose and camera as a sidecar row, the focal length's source (``estimated``
+    when the guides told it), the rectangle's aspect ratio and its source. The image's file
+    is read for its size and EXIF only; the guides are of the photo as its EXIF
+    ``orientation`` displays it (1: as stored). Raises
+    :class:`~gsrwt_cli.inputs.records.RecordError` for bad guides."""
+    own = {name: value for name, value in values.items() if name not in _POSE_VALUES}
+    own, source = with_focal(path, own, where, orientation)
+    size = image_file_size(path)
+    if size is None:
+        raise ValueError("cannot read the image's size")
+    width, height = displayed_size(orientation, *size)
+    if own.get("width") in (None, ""):
+        own["width"], own["height"] = width, height
+    posed, columns = guided_view_values(own, where, orientation)
+    view = view_from_values(posed, where, orientation)
+    row = {name: value for name, value in view.sidecar_values().items()
+           if name in ("pan", "tilt", "roll", "focal", "fx", "fy", "cx", "cy", "width",
+                       "height") and value is not None}
+    row["roll"] = view.roll
+    row["focal_source"] = columns.pop("focal_source", source)
+    row.update(columns)
+    return row
+
+
 def estimated_view_values(path: Path, values: Mapping[str, Any], where: str,
                           options: EstimateOptions) -> tuple[dict[str, Any], str, float]:
     """An image's values with its pose estimated (``rectify --auto``): the values (lens and
@@ -171,6 +207,9 @@ def estimated_view_values(path: Path, values: Mapping[str, Any], where: str,
     merged = {name: value for name, value in values.items()
               if name not in (*_POSE_VALUES, *SENSOR_FIELDS, "focal", "fx", "fy")}
     merged.update(estimated_values(estimate, camera, width, height, principal_point))
+    if values.get("fit") not in (None, "", "both"):  # --fit vertical or horizontal
+        merged["pan"], merged["tilt"], merged["roll"] = fit_pose(
+            merged["pan"], merged["tilt"], merged["roll"], values["fit"])
     return merged, source, round(estimate.confidence, 4)
 
 
@@ -203,6 +242,10 @@ def process_estimate(job: EstimateJob, options: EstimateOptions,
             warnings.simplefilter("ignore")
             if job.error is not None:
                 raise EstimateError(job.error)
+            if has_guides(job.values):
+                row.update(guided_row(job.source, job.values, job.where,
+                                      orientation_of(job.source, options)), status="ok")
+                return row
             estimate, camera, source, image = estimate_file(job.source, job.values, job.where,
                                                             options)
             row.update(estimate_row(estimate, source))

@@ -35,8 +35,9 @@ from ..imaging.images import (
     measure_image_file,
 )
 from ..inputs.focal import with_focal
+from ..inputs.guides import has_guides, parse_corners
 from ..inputs.parameters import Found, NotFound, Problem, resolve_parameters
-from ..inputs.records import RecordError, view_from_values
+from ..inputs.records import RecordError, guided_view_values, view_from_values
 from ..inputs.sidecar import Sidecar
 from ..inputs.sources import Source
 from ..io.outputs import OutsideOutputError, check_inside, remove_stale_temporaries, write_atomic
@@ -164,12 +165,21 @@ def _view(job: Job, estimate: bool = True, orientation: int | None = None
             raise JobError(str(error)) from None
         return view, found, {"pose_source": "estimated", "confidence": confidence}
     values, source = with_focal(job.source, job.values, job.where, orientation or 1)
-    if source is None:
+    guided = has_guides(values)
+    if source is None and not guided:
         raise JobError(
             "no focal length: none in the parameters, no camera file, and no usable "
             "focal length in the image's EXIF"
         )
     try:
+        if guided:  # the pose the guides show; the focal length too when nothing gives one
+            if values.get("width") in (None, "") and values.get("cx") in (None, ""):
+                size = image_file_size(job.source)
+                if size is not None:
+                    values["width"], values["height"] = displayed_size(orientation or 1,
+                                                                          *size)
+            values, columns = guided_view_values(values, job.where, orientation or 1)
+            source = columns.get("focal_source", source)
         return (view_from_values(values, job.where, orientation or 1), source,
                 {"pose_source": job.pose_source})
     except RecordError as error:
@@ -190,6 +200,19 @@ def _made_with(job: Job, settings: Settings) -> str | None:
 NOT_MADE_SO = ("its output exists, not made with these options (no valid row of the previous "
                "table records it); use --overwrite to redo it")
 NOT_A_FILE = "its output exists and is not a regular file; remove it or use another -o"
+
+
+def _framed(job: Job, settings: Settings) -> Settings:
+    """The settings of one image: with ``--bbox corners``, its corners in the framing."""
+    if settings.framing.bbox != "corners":
+        return settings
+    text = (job.values or {}).get("corners")
+    if text in (None, ""):
+        raise JobError("--bbox corners needs the rectangle's corners (--corners, or a "
+                       "corners column) for this image")
+    corners = parse_corners(str(text))
+    framing = replace(settings.framing, corners=tuple(map(tuple, corners.tolist())))
+    return replace(settings, framing=framing)
 
 
 def _plan(view: View, width: int, height: int, settings: Settings) -> Plan:
@@ -228,7 +251,7 @@ def process_job(job: Job, settings: Settings, scratch: Scratch | None = None) ->
                 raise JobError("no such file" if not job.source.exists() else "not a file")
             width, height = displayed_size(
                 orientation or 1, *measure_image_file(job.source, settings.max_input_pixels))
-            info = _plan(view, width, height, settings)  # refuses big outputs undecoded
+            info = _plan(view, width, height, _framed(job, settings))  # big outputs refused
             image = scratch.read(job.source, settings.max_input_pixels, orientation or 1)
             dtype, channels = image.dtype, 1 if image.ndim == 2 else image.shape[2]
             del image  # the scratch holds it for the warp
@@ -272,7 +295,7 @@ def record_row(job: Job, settings: Settings, status: str = "ok") -> dict[str, An
                        orientation=_orientation_cell(orientation))
             size = displayed_size(orientation or 1,
                                   *measure_image_file(job.source, settings.max_input_pixels))
-            info = _plan(view, size[0], size[1], settings)
+            info = _plan(view, size[0], size[1], _framed(job, settings))
         row.update(_geometry(info), image=str(job.source), status=status,
                    made_with=_made_with(job, settings))
         existing = image_file_size(job.output)

@@ -126,6 +126,8 @@ def made_with(values: Mapping[str, Any] | None, wall: str | None, settings: Sett
     words.append(("bbox", box if isinstance(box, str) else ",".join(map(_number, box))))
     if box in ("full", "crop"):
         words.append(("max_stretch", _number(framing.max_stretch)))
+    if box == "corners":
+        words.append(("margin", _number(framing.margin)))
     words.append(("scale", _number(framing.scale) if framing.px_per_unit is None
                   else f"{_number(framing.px_per_unit)}px/unit"))
     if framing.max_size is not None:

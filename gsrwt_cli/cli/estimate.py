@@ -20,7 +20,7 @@ from ..inputs.sidecar import SidecarError, display_path
 from ..io.storage import location
 from ..io.targets import Drawings, file_identity, protected_files
 from ..tables.columns import ESTIMATE_COLUMNS
-from ..tables.writer import FORMATS, TableWriter, format_from_extension
+from ..tables.writer import FORMATS, TableWriter, YamlRecordWriter, format_from_extension
 from .options import (
     VIEW_OPTIONS,
     InputError,
@@ -28,6 +28,7 @@ from .options import (
     Number,
     PathOrUrl,
     field_options,
+    guide_options,
     jobs_option,
     load_sidecar_option,
     make_output_directory,
@@ -67,16 +68,17 @@ camera_options = field_options(
 @click.command()
 @click.argument("inputs", nargs=-1, required=True, metavar="INPUT...")
 @click.option("-o", "--output", "output", default=None,
-              help="Write the table to this file (.csv, .tsv, .json, .jsonl, .md) instead of "
-                   "stdout; it is a sidecar for 'gsrwt rectify --sidecar'.")
+              help="Write the table to this file (.csv, .tsv, .json, .jsonl, .md, .yaml) "
+                   "instead of stdout; it is a sidecar for 'gsrwt rectify --sidecar'.")
 @click.option("--format", "-f", "fmt", type=click.Choice(FORMATS), default=None,
               help="Table format [default: from -o's extension; on stdout table on a "
                    "terminal, csv in a pipe].")
 @click.option("-r", "--recursive", is_flag=True, help="Descend into directories.")
 @click.option("--sidecar", type=PathOrUrl(dir_okay=False),
-              help="CSV or YAML of per-image intrinsics (focal, cx, cy, camera, lens); any "
-                   "pose in it is ignored.")
+              help="CSV or YAML of per-image intrinsics (focal, cx, cy, camera, lens) or "
+                   "guides (- for standard input); any pose in it is ignored.")
 @camera_options
+@guide_options
 @click.option("--min-confidence", type=Number(0, 1), default=DEFAULT_MIN_CONFIDENCE,
               show_default=True,
               help="Estimates less confident than this are errors; the confidence is the "
@@ -100,8 +102,10 @@ def estimate(inputs: tuple[str, ...], output: str | None, fmt: str | None, recur
 
     Writes one sidecar row per image: image, pan, tilt, roll, focal, cx, cy, width,
     height (what 'gsrwt rectify --sidecar' reads), then confidence, segments, inliers,
-    focal_source, the three vanishing points in pixels, status and error. Images that
-    cannot tell their pose get status error and no pose. Exit code 1 if any failed.
+    focal_source, aspect and aspect_source, the three vanishing points in pixels, status and
+    error. Images that cannot tell their pose get status error and no pose. With guides
+    (--corners, --verticals, --horizontals) the pose is the one they show. Exit code 1 if
+    any failed.
 
     \b
     Examples:
@@ -112,11 +116,15 @@ def estimate(inputs: tuple[str, ...], output: str | None, fmt: str | None, recur
     input_pixel_limit = parse_pixel_count(max_input_pixels, "--max-input-pixels")
     if output is not None and output != "-":
         table_format = fmt or format_from_extension(output) or ""
-        if table_format not in FORMATS or table_format == "table" and fmt is None:
-            raise click.BadParameter("the table's name must end in .csv, .tsv, .json, .jsonl "
-                                     "or .md, or give --format", param_hint="'-o'")
+        if fmt is None and output.lower().endswith((".yaml", ".yml")):
+            table_format = "yaml"  # a YAML sidecar
+        elif table_format not in FORMATS or table_format == "table" and fmt is None:
+            raise click.BadParameter("the table's name must end in .csv, .tsv, .json, .jsonl, "
+                                     ".md or .yaml, or give --format", param_hint="'-o'")
     else:
         table_format, output = resolve_format(fmt), "-"
+    if str(sidecar) == "-" and "-" in inputs:
+        raise InputError("--sidecar - and INPUT - cannot both read standard input")
     loaded = load_sidecar_option(sidecar)
     if camera.get("camera"):
         try:
@@ -163,7 +171,9 @@ def estimate(inputs: tuple[str, ...], output: str | None, fmt: str | None, recur
     progress = tqdm(total=len(job_list), unit="img", file=sys.stderr, dynamic_ncols=True,
                     disable=quiet or not sys.stderr.isatty())
     with stop_on_signals(), open_table(output) as stream:
-        writer = TableWriter(stream, ESTIMATE_COLUMNS, table_format)
+        writer: TableWriter | YamlRecordWriter = (
+            YamlRecordWriter(stream, ESTIMATE_COLUMNS) if table_format == "yaml"
+            else TableWriter(stream, ESTIMATE_COLUMNS, table_format))
 
         def on_row(row: dict[str, Any]) -> None:
             writer.write_row(row)

@@ -129,13 +129,20 @@ def view_from_options(values: dict[str, Any]) -> View:
 
 
 def load_sidecar_option(sidecar: Path | None) -> Sidecar | None:
-    """The ``--sidecar`` the user named, loaded (None without one), or an
-    :class:`InputError` saying what is wrong with the file."""
+    """The ``--sidecar`` the user named, loaded (None without one; ``-``: standard input),
+    or an :class:`InputError` saying what is wrong with the file."""
     if sidecar is None:
         return None
-    from ..inputs.sidecar import SidecarError, load_sidecar
+    from ..inputs.sidecar import SidecarError, load_sidecar, sidecar_from_text
 
     try:
+        if str(sidecar) == "-":  # a pipe: gsrwt estimate ... | gsrwt rectify --sidecar -
+            data = click.get_binary_stream("stdin").read()
+            try:
+                return sidecar_from_text(data.decode("utf-8"))
+            except UnicodeDecodeError as error:
+                raise InputError(f"--sidecar -: standard input is not UTF-8 text "
+                                 f"({error.reason})") from None
         return load_sidecar(sidecar)
     except SidecarError as error:
         raise InputError(str(error)) from None
@@ -281,6 +288,54 @@ view_options = field_options(
     "view options and sidecar fields override it.")
 
 
+#: The guide options of guided correction, as fields of a sidecar row too
+#: (:mod:`~gsrwt_cli.inputs.guides`), with their help.
+GUIDE_OPTIONS = {
+    "corners": ("Four corners of a rectangle upright on the wall, \"x1,y1 x2,y2 x3,y3 x4,y4\" "
+                "in pixels (top-left, top-right, bottom-right, bottom-left): the pose from "
+                "them, and the focal length when none is given and the view is oblique "
+                "enough."),
+    "aspect": ("The rectangle's width over height, W:H or a number (A4 upright: 210:297) "
+               "[default: estimated from the corners]."),
+    "verticals": ("Two or more segments along vertical edges of the wall, "
+                  "\"x1,y1,x2,y2;x1,y1,x2,y2;...\" in pixels."),
+    "horizontals": "Two or more segments along horizontal edges of the wall, as --verticals.",
+}
+
+
+def _checked_guide(ctx: click.Context, param: click.Parameter, value: str | None
+                   ) -> str | None:
+    """A guide option's text, refused (exit 2, naming the option) unless it reads."""
+    if value is None:
+        return None
+    from ..geometry.guides import GuideError
+    from ..inputs.guides import parse_aspect, parse_corners, parse_segments
+
+    try:
+        if param.name == "corners":
+            parse_corners(value)
+        elif param.name == "aspect":
+            parse_aspect(value)
+        else:
+            parse_segments(value, str(param.name))
+    except GuideError as error:
+        raise InputError(f"option --{param.name}: {error}") from None
+    return value
+
+
+def guide_options(func: F) -> F:
+    """``--corners --aspect --verticals --horizontals --fit``: the pose shown by hand."""
+    func = click.option("--fit", type=click.Choice(("both", "vertical", "horizontal")),
+                        default=None,
+                        help="What the output straightens: both (the frontal view), vertical "
+                             "(verticals vertical and parallel, the horizontal perspective "
+                             "kept: a keystone fix) or horizontal [default: both].")(func)
+    for name in reversed(GUIDE_OPTIONS):
+        func = click.option(f"--{name}", callback=_checked_guide,
+                            help=GUIDE_OPTIONS[name])(func)
+    return func
+
+
 def interpolation_option(func: F) -> F:
     """``--interpolation``: how output pixels are sampled from the input."""
     from ..imaging.images import INTERPOLATIONS
@@ -371,5 +426,5 @@ def option_message(error: RecordError) -> str:
 
 def view_defaults(kwargs: dict[str, Any]) -> dict[str, Any]:
     """The view options the user gave, as fallback values for sidecar records."""
-    return {name: kwargs[name] for name in (*VIEW_FIELDS, "camera")
+    return {name: kwargs[name] for name in (*VIEW_FIELDS, "camera", *GUIDE_OPTIONS, "fit")
             if kwargs.get(name) is not None}

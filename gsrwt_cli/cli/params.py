@@ -13,6 +13,7 @@ from .options import (
     InputError,
     PathOrUrl,
     format_option,
+    guide_options,
     report_error,
     resolve_format,
     view_defaults,
@@ -23,6 +24,7 @@ from .options import (
 
 @click.command()
 @view_options
+@guide_options
 @click.option(
     "--sidecar",
     type=PathOrUrl(dir_okay=False),

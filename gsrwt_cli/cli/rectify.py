@@ -80,6 +80,7 @@ from .options import (
     Integer,
     Number,
     PathOrUrl,
+    guide_options,
     interpolation_option,
     jobs_option,
     load_sidecar_option,
@@ -95,9 +96,9 @@ from .options import (
 
 
 def parse_bbox(text: str) -> str | tuple[float, float, float, float]:
-    """``frontal``, ``full``, ``crop`` or ``X0,Y0,X1,Y1`` (default-frame pixels, X1 > X0,
-    Y1 > Y0)."""
-    if text in ("frontal", "full", "crop"):
+    """``frontal``, ``full``, ``crop``, ``corners`` or ``X0,Y0,X1,Y1`` (default-frame
+    pixels, X1 > X0, Y1 > Y0)."""
+    if text in ("frontal", "full", "crop", "corners"):
         return text
     parts = text.split(",")
     try:
@@ -106,7 +107,8 @@ def parse_bbox(text: str) -> str | tuple[float, float, float, float]:
         box = ()
     if len(box) != 4 or not all(math.isfinite(v) for v in box):
         raise click.BadParameter(
-            f"expected frontal, full, crop or X0,Y0,X1,Y1 (four numbers), got {quote(text)}",
+            f"expected frontal, full, crop or X0,Y0,X1,Y1 (four numbers), or corners; got "
+            f"{quote(text)}",
             param_hint="'--bbox'",
         )
     if box[2] <= box[0] or box[3] <= box[1]:
@@ -455,12 +457,17 @@ def dask_executor(address: str, processes: int, retries: int,
               help="Descend into directories and mirror their tree under OUTDIR.")
 @click.option("--sidecar", type=PathOrUrl(dir_okay=False),
               help="CSV or YAML of per-image parameters (rows match by relative path or name); "
-                   "a path or a URL.")
+                   "a path, a URL, or - for standard input.")
 @view_options
+@guide_options
 @click.option("--bbox", default="frontal", show_default=True,
               help="Output extent: frontal (the thesis's box, the input's size), full (the "
                    "visible wall, up to --max-stretch), crop (the largest rectangle of it with "
-                   "no fill) or X0,Y0,X1,Y1 in default-frame pixels.")
+                   "no fill), corners (the rectangle of --corners, at a resolution that keeps "
+                   "its pixels) or X0,Y0,X1,Y1 in default-frame pixels.")
+@click.option("--margin", type=Number(min=0), default=0.0, show_default=True,
+              help="With --bbox corners: room around the rectangle, in percent of its width "
+                   "and height.")
 @click.option("--max-stretch", type=Number(), default=4.0, show_default=True,
               help="With --bbox full or crop: stop where the image is magnified more than "
                    "this many times the magnification at its centre.")
@@ -602,7 +609,7 @@ def settings_from_options(outdir: Path | Location, options: dict[str, Any]
         framing=Framing(bbox=bbox, scale=scale or 1.0, px_per_unit=px_per_unit,
                         max_stretch=max_stretch,
                         max_pixels=parse_pixel_count(options.pop("max_pixels"), "--max-pixels"),
-                        max_size=size_limit),
+                        max_size=size_limit, margin=options.pop("margin")),
         interpolation=options.pop("interpolation"), fill=options.pop("fill"), alpha=alpha,
         quality=options.pop("quality"), overwrite=options.pop("overwrite"),
         dry_run=options.pop("dry_run"),
@@ -671,6 +678,8 @@ def plan_batch(inputs: tuple[str, ...], outdir: Path | Location, recursive: bool
     """Every check before any image is read: the inputs listed, the sidecar and --camera
     read, nothing the user gave us overwritten, the output directory and table writable;
     then the jobs planned (one shard's), and stale temporaries of a killed run removed."""
+    if str(sidecar) == "-" and "-" in inputs:
+        raise InputError("--sidecar - and INPUT - cannot both read standard input")
     loaded = load_sidecar_option(sidecar)
     sources, unreadable = collect_sources(inputs, recursive)
     if not sources and not unreadable:

@@ -129,6 +129,31 @@ def fit_frame(frame: Frame, max_size: tuple[int, int]) -> Frame:
     return Frame(frame.x0, frame.y0, frame.x1, frame.y1, scale)
 
 
+def corners_frame(view: View, corners: np.ndarray, margin_percent: float = 0.0,
+                  scale: float = 1.0) -> Frame:
+    """The frame of a rectangle's four corners (input pixels, ``--bbox corners``): their
+    bounding box in the default frame, widened by ``margin_percent`` of its width and height
+    on each side, at the resolution that keeps the rectangle's pixels (no side of it has
+    fewer output pixels than it had input pixels) times ``scale``.
+
+    With the pose the corners gave (``--fit both``) the rectangle is upright in the output,
+    so its corners land on the frame's axis-aligned rectangle.
+    """
+    corners = np.asarray(corners, dtype=np.float64).reshape(4, 2)
+    frontal = map_points(output_from_input(view),
+                         view.intrinsics.ideal_pixels(corners)) + 0.5  # centres to edges
+    if not np.all(np.isfinite(frontal)):
+        raise ValueError("a corner of --bbox corners is beyond the horizon")
+    x0, y0 = frontal.min(axis=0)
+    x1, y1 = frontal.max(axis=0)
+    pad_x, pad_y = margin_percent / 100 * (x1 - x0), margin_percent / 100 * (y1 - y0)
+    input_sides = np.linalg.norm(np.roll(corners, -1, axis=0) - corners, axis=1)
+    frontal_sides = np.linalg.norm(np.roll(frontal, -1, axis=0) - frontal, axis=1)
+    keeps = float(np.max(input_sides / np.maximum(frontal_sides, 1e-12)))
+    return Frame(float(x0 - pad_x), float(y0 - pad_y), float(x1 + pad_x), float(y1 + pad_y),
+                 scale * keeps)
+
+
 def default_frame(view: View, scale: float = 1.0) -> Frame:
     """The thesis's bounding box (Fig. 5.7): the input's size at frontal resolution."""
     return Frame(0.0, 0.0, float(view.width), float(view.height), scale)
@@ -344,10 +369,12 @@ class Framing:
 
     ``bbox``: ``"frontal"`` (the default frame: the input's size at frontal resolution,
     centred where the optical axis meets the wall), ``"full"`` (:func:`full_frame`),
-    ``"crop"`` (:func:`crop_frame`) or an explicit ``(x0, y0, x1, y1)`` in default-frame
-    pixel edges. ``scale``: output pixels per frontal pixel, or ``px_per_unit``: output
-    pixels per unit of the wall's distance (needs the view's ``distance``). ``max_stretch``:
-    how much more than the principal point a pixel may be magnified (full, crop).
+    ``"crop"`` (:func:`crop_frame`), ``"corners"`` (:func:`corners_frame` of ``corners``,
+    the image's rectangle in input pixels, widened by ``margin`` percent) or an explicit
+    ``(x0, y0, x1, y1)`` in default-frame pixel edges. ``scale``: output pixels per frontal
+    pixel, or ``px_per_unit``: output pixels per unit of the wall's distance (needs the
+    view's ``distance``). ``max_stretch``: how much more than the principal point a pixel
+    may be magnified (full, crop). ``margin`` and ``corners``: of ``"corners"``.
     ``max_pixels``: the largest output, in pixels. ``max_size``: ``(width, height)`` the
     output must fit in; a larger frame is kept but its scale lowered until it fits.
     """
@@ -358,6 +385,8 @@ class Framing:
     max_stretch: float = 4.0
     max_pixels: float = 50e6
     max_size: tuple[int, int] | None = None
+    margin: float = 0.0
+    corners: tuple[tuple[float, float], ...] | None = None
 
     def output_scale(self, view: View) -> float:
         """Output pixels per frontal pixel. One frontal pixel covers ``Zc / f`` wall units,
@@ -408,6 +437,11 @@ def _plan_output(view: View, framing: Framing, scale: float) -> Plan:
         frame = full_frame(view, max_stretch, scale)
     elif bbox == "crop":
         frame = crop_frame(view, max_stretch, scale)
+    elif bbox == "corners":
+        if framing.corners is None:
+            raise ValueError("--bbox corners needs the rectangle's corners (--corners, or a "
+                             "corners column) for this image")
+        frame = corners_frame(view, np.array(framing.corners), framing.margin, scale)
     else:
         frame = Frame(*(float(v) for v in bbox), scale=scale)
     if framing.max_size is not None:

@@ -23,6 +23,7 @@ from pathlib import Path, PurePosixPath
 from typing import Any
 
 from ..geometry.camera import View
+from .guides import GUIDE_GIVERS, has_guides
 from .records import NUMERIC_FIELDS, merge_values, view_from_values
 from .sidecar import (
     Record,
@@ -37,8 +38,9 @@ from .sidecar import (
 #: The options that alone make a view: the pose; the focal length may come from --focal,
 #: --fx/--fy, a --camera file or the image's EXIF.
 REQUIRED_OPTIONS = ("pan", "tilt")
-#: Fields that give a pose: pan/tilt, the GS-RWT's delta/a, solvePnP's rvec, a quaternion.
-POSE_GIVERS = ("pan", "tilt", "delta", "a", "rvec_x", "qw")
+#: Fields that give a pose: pan/tilt, the GS-RWT's delta/a, solvePnP's rvec, a quaternion,
+#: guides (:data:`~gsrwt_cli.inputs.guides.GUIDE_GIVERS`).
+POSE_GIVERS = ("pan", "tilt", "delta", "a", "rvec_x", "qw", *GUIDE_GIVERS)
 
 
 class Origin(enum.Enum):
@@ -146,7 +148,7 @@ def _resolve(image: Path, relative: PurePosixPath | str, sidecar: Sidecar | None
     beside = adjacent_yaml(image)
     if beside is not None:
         return _from_adjacent_yaml(image, beside, fallback)
-    if set(REQUIRED_OPTIONS) <= set(fallback):
+    if set(REQUIRED_OPTIONS) <= set(fallback) or has_guides(fallback):
         return Found(fallback, "options", Origin.OPTIONS)
     looked = []
     named = None if sidecar is None else display_path(sidecar.path)
@@ -166,7 +168,7 @@ def _from_adjacent_yaml(image: Path, beside: Path, fallback: dict[str, Any]) -> 
             return Problem(f"{where}: expected a mapping of field to value", where)
         fields = {name: value for name, value in fields_of(where, data).items()
                   if value is not None}
-        if set(fields) & set(NUMERIC_FIELDS):  # one record: this image's parameters
+        if set(fields) & {*NUMERIC_FIELDS, *GUIDE_GIVERS}:  # one record: this image's parameters
             return Found(merge_values(fields, fallback), where, Origin.ADJACENT_YAML)
         record: Record | None = sidecar_from_yaml(beside, data).find(image.name)
     except SidecarError as error:

@@ -30,9 +30,11 @@ from ..geometry.camera import (
     ViewError,
 )
 from ..geometry.gsrwt import pan_tilt_from_gsrwt
+from ..geometry.guides import GuideError
 from ..geometry.orientation import displayed_intrinsics
 from ..geometry.pinhole import SIMPLE_PINHOLE_FIELDS, pinhole_numbers  # noqa: F401  (named here too)
 from ..geometry.rotations import PoseError, distance_from_tvec, pose_from_quaternion, pose_from_rvec
+from .guides import GUIDE_FIELDS, guided_values, has_guides
 
 GSRWT_FIELDS = ("delta", "a", "gamma")
 #: A pose as OpenCV's solvePnP gives it (camera_from_wall, OpenCV frames), or a quaternion of
@@ -47,7 +49,9 @@ SENSOR_FIELDS = ("focal_mm", "sensor_width_mm", "sensor_height_mm")
 NUMERIC_FIELDS = VIEW_FIELDS + LENS_FIELDS + POSE_FIELDS + SENSOR_FIELDS + GSRWT_FIELDS
 #: Fields whose values are words, not numbers: ``camera`` names a calibration file (OpenCV
 #: or ROS, relative to the sidecar) whose intrinsics the record's own fields override.
-TEXT_FIELDS = ("distortion_model", "camera")
+#: The guides of guided correction (``corners``, ``verticals``, ``horizontals``, ``aspect``,
+#: ``fit``: :mod:`~gsrwt_cli.inputs.guides`) are texts too.
+TEXT_FIELDS = ("distortion_model", "camera", *GUIDE_FIELDS)
 #: Every field a sidecar record may give.
 SIDECAR_FIELDS = NUMERIC_FIELDS + TEXT_FIELDS
 #: How far a given gamma may stray from the one that delta and a imply (the thesis rounds to 1°).
@@ -67,7 +71,9 @@ def merge_values(own: Mapping[str, Any], *fallbacks: Mapping[str, Any]) -> dict[
     """``own`` values over the ``fallbacks`` (earlier ones win over later ones).
 
     A record that gives the pose as the GS-RWT's ``delta``/``a`` takes no pan or tilt from
-    the fallbacks, and one that gives pan/tilt takes no ``delta``, ``a`` or ``gamma``.
+    the fallbacks, and one that gives pan/tilt takes no ``delta``, ``a`` or ``gamma``; one
+    that gives a pose takes no guides (``corners``, ``verticals``, ``horizontals``,
+    ``aspect``), and one that gives guides takes no pan, tilt, roll, delta, a or gamma.
     """
     if not any(fallbacks):  # nothing to fall back on (a sidecar's row alone, most often)
         return dict(own)
@@ -80,6 +86,12 @@ def merge_values(own: Mapping[str, Any], *fallbacks: Mapping[str, Any]) -> dict[
         merged.pop("tilt", None)
     elif own_keys & {"pan", "tilt"}:
         for name in GSRWT_FIELDS:
+            merged.pop(name, None)
+    if own_keys & {"pan", "tilt", "delta", "a", *RVEC_FIELDS, *QUATERNION_FIELDS}:
+        for name in GUIDE_FIELDS[:-1]:  # a pose of its own: the options' guides are not its
+            merged.pop(name, None)
+    elif own_keys & set(GUIDE_FIELDS):
+        for name in ("pan", "tilt", "roll", *GSRWT_FIELDS):  # guides of its own: their pose
             merged.pop(name, None)
     merged.update(own)
     return merged
@@ -133,8 +145,12 @@ def view_from_values(values: Mapping[str, Any], where: str, orientation: int = 1
 
     When ``delta`` and ``a`` are given instead of pan and tilt, the pose comes from the GS-RWT
     parameters (:func:`~gsrwt_cli.geometry.gsrwt.pan_tilt_from_gsrwt`); a given ``gamma`` must
-    agree with them within :data:`GAMMA_TOLERANCE_DEG`. Raises only :class:`RecordError`.
+    agree with them within :data:`GAMMA_TOLERANCE_DEG`. Values with guides (``corners``,
+    ``verticals``, ``horizontals``) get the pose they show (:func:`guided_view_values`).
+    Raises only :class:`RecordError`.
     """
+    if has_guides(values):
+        values = guided_view_values(values, where, orientation)[0]
     numbers_given = {
         name: _number(where, name, values[name])
         for name in NUMERIC_FIELDS
@@ -190,6 +206,35 @@ def view_from_values(values: Mapping[str, Any], where: str, orientation: int = 1
                 f"gamma = {implied:.2f}",
             )
     return view
+
+
+def guided_view_values(values: Mapping[str, Any], where: str, orientation: int = 1
+                       ) -> tuple[dict[str, Any], dict[str, Any]]:
+    """Values whose guides show the pose, with that pose (and the focal length, when the
+    guides told it) in place of the guides, and the columns the guides add (``aspect``,
+    ``aspect_source``, ``focal_source``: :func:`~gsrwt_cli.inputs.guides.guided_values`).
+    A pose given besides the guides is an error. ``orientation``: as for
+    :func:`view_from_values` (the guides' pixels are the displayed photo's)."""
+    posed = [name for name in ("pan", "tilt", "roll", *GSRWT_FIELDS, *RVEC_FIELDS,
+                               *QUATERNION_FIELDS) if values.get(name) not in (None, "")]
+    if posed:
+        raise RecordError(where, posed[0], f"give guides or a pose ({posed[0]}), not both")
+
+    def camera_of(plain: dict[str, Any]) -> Intrinsics | None:
+        if not any(plain.get(name) not in (None, "")
+                   for name in ("focal", "fx", "fy", "focal_mm", "camera")):
+            return None
+        return view_from_values({**plain, "pan": 0, "tilt": 0}, where, orientation).intrinsics
+
+    def principal_point_of(plain: dict[str, Any]) -> tuple[float, float] | None:
+        view = view_from_values({**plain, "pan": 0, "tilt": 0, "focal": 1.0}, where,
+                                orientation)
+        return (view.cx, view.cy) if view.has_principal_point else None
+
+    try:
+        return guided_values(values, camera_of, principal_point_of)
+    except GuideError as error:
+        raise RecordError(where, error.field, str(error)) from None
 
 
 def _focal_from_millimetres(where: str, numbers: dict[str, float]) -> None:

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import csv
 import io
+import re
 from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path, PurePosixPath
@@ -174,6 +175,25 @@ def load_sidecar(path: str | Path) -> Sidecar:
         return sidecar_from_yaml(path, parse_yaml(path, text))
     records = _csv_records(path, io.StringIO(text, newline=""),
                            delimiter="\t" if suffix == ".tsv" else ",")
+    return Sidecar(path, list(_without_duplicates(records)))
+
+
+#: The name of a sidecar read from standard input (``--sidecar -``) in messages.
+STDIN_SIDECAR = "standard input"
+
+
+def sidecar_from_text(text: str, name: str = STDIN_SIDECAR) -> Sidecar:
+    """A sidecar given as text (``--sidecar -``: a pipe from ``gsrwt estimate``), CSV, TSV
+    or YAML told apart by its content: YAML when its first line is a list item, a flow
+    collection or ``key: value``; else CSV, or TSV when that line has a tab. Relative file
+    names in it (``camera``) are relative to the working directory."""
+    path = Path(name)
+    first = next((line.strip() for line in text.lstrip("\ufeff").splitlines()
+                  if line.strip() and not line.lstrip().startswith("#")), "")
+    if first.startswith(("-", "{", "[")) or re.match(r"^[^,\t]*:(\s|$)", first):
+        return sidecar_from_yaml(path, parse_yaml(path, text))
+    records = _csv_records(path, io.StringIO(text.lstrip("\ufeff"), newline=""),
+                           delimiter="\t" if "\t" in first else ",")
     return Sidecar(path, list(_without_duplicates(records)))
 
 

@@ -33,10 +33,11 @@ ORIENTATION_VALUES = ("1", "2", "3", "4", "5", "6", "7", "8", "ignored")
 #: ``DIRECTION_NAMES``).
 VANISHING_DIRECTIONS = ("vertical", "wall", "normal")
 
-#: ``gsrwt estimate``: a sidecar row of the estimated camera, and the evidence.
+#: ``gsrwt estimate``: a sidecar row of the estimated camera, and the evidence (``aspect``,
+#: ``aspect_source``: the rectangle of ``--corners``, ``given`` or ``estimated``).
 ESTIMATE_COLUMNS = (
     "image", "pan", "tilt", "roll", "focal", "fx", "fy", "cx", "cy", "width", "height",
-    "confidence", "segments", "inliers", "focal_source",
+    "confidence", "segments", "inliers", "focal_source", "aspect", "aspect_source",
     *(f"vp_{name}_{axis}" for name in VANISHING_DIRECTIONS for axis in ("col", "row")),
     "status", "error",
 )

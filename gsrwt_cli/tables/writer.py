@@ -218,3 +218,29 @@ def read_table(stream: IO[str], fmt: str) -> list[dict[str, Any]]:
     if not isinstance(rows, list) or not all(isinstance(row, dict) for row in rows):
         raise ValueError("not a table of rows")
     return rows
+
+
+class YamlRecordWriter:
+    """A table as a YAML list of records, one per row with its non-empty cells, written as
+    the rows come (``gsrwt estimate -o poses.yaml``: a YAML sidecar that ``gsrwt rectify
+    --sidecar`` reads). Floats are rounded as in the machine formats."""
+
+    def __init__(self, stream: IO[str], columns: Sequence[str]) -> None:
+        self.stream = stream
+        self.columns = list(columns)
+        self._rows_written = 0
+
+    def write_row(self, row: Mapping[str, Any]) -> None:
+        import yaml
+
+        record = {column: _json_value(row[column]) for column in self.columns
+                  if row.get(column) is not None and row.get(column) != ""}
+        record = {name: value for name, value in record.items() if value is not None}
+        self.stream.write(yaml.safe_dump([record], sort_keys=False, allow_unicode=True))
+        self.stream.flush()
+        self._rows_written += 1
+
+    def close(self) -> None:
+        """An empty list when no row was written."""
+        if self._rows_written == 0:
+            self.stream.write("[]\n")
