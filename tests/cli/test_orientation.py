@@ -230,3 +230,27 @@ def test_lines_and_match_find_the_same_landmarks_on_a_turned_photo(tmp_path):
     assert rows("match", turned, *knob) == rows("match", upright, *knob)
     ignored = run_gsrwt("lines", str(turned), *pose, "--exif-orientation", "ignore")
     assert ignored.stdout != run_gsrwt("lines", str(upright), *pose).stdout
+
+
+def test_corners_are_the_displayed_photos(tmp_path):
+    """``--corners`` (the README's door) on the door view stored turned (tag 7): the same
+    corners, of the displayed photo, give the upright view's output and pose."""
+    door_path = Path(__file__).resolve().parents[2] / "sample_data" / "views" / \
+        "door_p20_t-8_f800.jpg"
+    with Image.open(door_path) as door:
+        upright = write_oriented(tmp_path / "upright.png", door.copy(), None)
+        turned = write_oriented(tmp_path / "turned.png", door.copy(), 7)
+    corners = "541.9,77.9 780.4,45.4 766.7,638.2 550.5,613.2"
+
+    def run(path: Path) -> tuple[np.ndarray, dict]:
+        out = tmp_path / path.stem
+        result = run_gsrwt("rectify", str(path), "--corners", corners, "--bbox", "corners",
+                           "-j", "1", "-o", str(out), "--table", str(out / "t.csv"))
+        assert result.returncode == 0, result.stderr
+        return stored_pixels(out / path.name), read_table(out / "t.csv")[0]
+
+    (reference, upright_row), (output, turned_row) = run(upright), run(turned)
+    assert turned_row["orientation"] == "7"
+    for column in ("pan_deg", "tilt_deg", "roll_deg", "focal_px"):
+        assert turned_row[column] == upright_row[column]
+    assert np.array_equal(output, reference)
