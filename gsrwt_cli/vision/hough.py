@@ -391,9 +391,10 @@ def _segments(
     line may sit a degree and a pixel off the edge). The free voters within
     :data:`PIECE_VOTER_DISTANCE` of the fitted line (the thin chain of a faint, noisy edge
     wanders) are sorted along it and cut where consecutive ones are more than ``max_gap``
-    apart. Each piece long enough is refitted (:func:`_piece`), and its voters are taken: no
-    later cell uses them; a cell left with fewer than ``min_votes`` free voters near its line
-    is dropped. Each step is vectorized over the pixels of a few bins.
+    apart. Each piece long enough that stands out from what lies beside it
+    (:func:`_stands_out`) is refitted (:func:`_piece`), and its voters are taken: no later
+    cell uses them; a cell left with fewer than ``min_votes`` free voters near its line is
+    dropped. Each step is vectorized over the pixels of a few bins.
     """
     voter_distance = max(HOUGH_VOTER_DISTANCE, 0.5 * rho_step)
     free = np.ones(voters.x.size, bool)
@@ -406,7 +407,7 @@ def _segments(
         nearby = nearby[free[nearby]]
         _, across = _along_and_across(voters.x[nearby], voters.y[nearby], theta, rho)
         nearby = nearby[np.abs(across) <= NEAR_CELL_DISTANCE]
-        if nearby.size < 2:
+        if nearby.size < max(2, min_votes):  # too few left for the test below
             continue
         near_x, near_y, near_weight = voters.x[nearby], voters.y[nearby], voters.weight[nearby]
         close = np.zeros(nearby.size, bool)
@@ -432,6 +433,9 @@ def _segments(
             first, last = float(along[start]), float(along[end])
             if last - first < min_length - 1e-9:
                 continue
+            if magnitude is not None and not _stands_out(magnitude, measured, theta, rho,
+                                                         first, last):
+                continue  # on the cell's line first: most pieces fail, before their refit
             pixels = support.near(theta, rho, first - 2.0, last + 2.0, voter_distance + 2.0,
                                   peak_theta_bin)
             members = nearby[(voter_along >= first - 3.0) & (voter_along <= last + 3.0)]
@@ -513,11 +517,14 @@ def _stands_out(magnitude: np.ndarray, measured: np.ndarray | None, theta: float
     cols = np.rint(rho * c - along * s + offsets * c).astype(np.int64)
     rows = np.rint(rho * s + along * c + offsets * s).astype(np.int64)
     seen = (cols >= 0) & (cols < width) & (rows >= 0) & (rows < height)
-    rows, cols = np.where(seen, rows, 0), np.where(seen, cols, 0)
+    np.clip(rows, 0, height - 1, out=rows)
+    np.clip(cols, 0, width - 1, out=cols)
     if measured is not None:
         seen &= measured[rows, cols]
     nearest = 1 + len(SURROUND_OFFSETS)  # the row of -SURROUND_OFFSETS[0]
-    if not (seen[1].mean() >= 0.5 and seen[nearest].mean() >= 0.5 and seen[0].any()):
+    half = 0.5 * along.size
+    if not (np.count_nonzero(seen[1]) >= half and np.count_nonzero(seen[nearest]) >= half
+            and seen[0].any()):
         return False
     sampled = magnitude[rows, cols]
     strength = float(np.median(sampled[0][seen[0]]))
