@@ -172,8 +172,10 @@ def lines(images: tuple[Path, ...], sidecar: Path | None, edge_threshold: float,
     """Straight segments (door boundaries) by the Hough transform on frontal views (Sec. 5.2.2).
 
     Edges: thin hysteresis edges of the smoothed 3x3 Sobel gradient, compensated for the
-    rectification's magnification, none at the fill. Each edge pixel votes once, at its own
-    gradient orientation; each line is cut where its edge pixels have gaps. x1..y2 are the
+    rectification's magnification, none at the fill. Each edge pixel votes at its own
+    gradient orientation and as far beside it as the image's noise makes that uncertain;
+    each line is cut where its edge pixels have gaps, and a segment is kept if it stands out
+    from what lies beside it (a short one clearly, a long one may be faint). x1..y2 are the
     segment's end points in the frontal view, x1_src..y2_src in the original image.
 
     \b

@@ -435,12 +435,12 @@ def _segments(
                 continue
             if magnitude is not None and not _stands_out(magnitude, measured, theta, rho,
                                                          first, last):
-                continue  # on the cell's line first: most pieces fail, before their refit
+                continue
             pixels = support.near(theta, rho, first - 2.0, last + 2.0, voter_distance + 2.0,
                                   peak_theta_bin)
             members = nearby[(voter_along >= first - 3.0) & (voter_along <= last + 3.0)]
             line = _piece(theta, rho, cell_theta, first, last, voters, members, pixels,
-                          voter_distance, free, gradient, magnitude, measured)
+                          voter_distance, free, gradient, measured)
             if line is not None and line.length >= min_length - 1e-9:
                 lines.append(line)
     return lines
@@ -450,7 +450,7 @@ def _piece(
     theta: float, rho: float, cell_theta: float, first: float, last: float, voters: _Pixels,
     members: np.ndarray, pixels: tuple[np.ndarray, np.ndarray, np.ndarray],
     voter_distance: float, free: np.ndarray, gradient: np.ndarray | None = None,
-    magnitude: np.ndarray | None = None, measured: np.ndarray | None = None,
+    measured: np.ndarray | None = None,
 ) -> Line | None:
     """One segment between ``first`` and ``last`` along the line ``(theta, rho)``.
 
@@ -460,11 +460,11 @@ def _piece(
     between its two pixel columns). Its ends are its first and last free voters (of
     ``members``) within :data:`PIECE_VOTER_DISTANCE` of the refitted line, projected onto it;
     they are then taken (marked in ``free``). None if they are fewer than :data:`MIN_FILL`
-    per pixel of its length, or if, with the edges' gradient ``magnitude``, the segment does
-    not stand out from what lies beside it (:func:`_stands_out`). With the raw
-    ``gradient``, each end then moves outward by whole pixels (at most
-    :data:`MAX_END_EXTENSION`) while the gradient across the line, sampled on it, keeps half
-    the median strength of its voters, with their polarity.
+    per pixel of its length. With the raw ``gradient``, each end then moves outward by whole
+    pixels (at most :data:`MAX_END_EXTENSION`) while the gradient across the line, sampled
+    on it, keeps half the median strength of its voters, with their polarity; with the
+    ``measured`` pixels, each end then moves inward until it lies on one
+    (:func:`_measured_ends`).
     """
     sx, sy, sw = pixels
     for _ in range(2):
@@ -482,8 +482,6 @@ def _piece(
     if members.size < max(2.0, MIN_FILL * (last - first)):
         return None
     first, last = float(along.min()), float(along.max())
-    if magnitude is not None and not _stands_out(magnitude, measured, theta, rho, first, last):
-        return None
     free[members] = False
     c, s = math.cos(theta), math.sin(theta)
     if gradient is not None:
