@@ -96,6 +96,8 @@ def main() -> None:
     print(f"precision vertical       {total.vertical_precision:.3f}  "
           f"({total.vertical_on_labels}/{total.vertical_lines})")
     print(f"precision all            {total.precision:.3f}  ({total.on_labels}/{total.lines})")
+    print(f"  stricter: within a label {total.strict_vertical_precision:.3f} / "
+          f"{total.strict_precision:.3f} (vertical / all; ends within 2 px of the label itself)")
     print(f"lines per image          {total.lines / max(len(measured), 1):.1f}")
     if not args.cli:
         cpu = [item.cpu_s * 1000 for item in measured]

@@ -19,7 +19,9 @@ are scored alike:
   projection onto the label covers half of the label's length;
 - "lies on a label": within :data:`PRECISION_ANGLE_DEG` of its direction, both ends of the
   reported line within 2 px of the label's line, at least half of the reported line's length
-  beside the label.
+  beside the label. A stricter reading is counted too (``within``): within
+  :data:`RECALL_ANGLE_DEG` of the label's direction and both ends within 2 px of the label
+  itself (the segment, not its line): a line that runs on past a label's end is not on it.
 
 The labels are in the photo's pixels. They are mapped into the frontal view through the
 view's own pixel map (:attr:`CanonicalView.pixel_map`, source to frontal, built from the
@@ -94,6 +96,8 @@ class Score:
     vertical_on_labels: int = 0
     lines: int = 0
     on_labels: int = 0
+    vertical_within: int = 0
+    within: int = 0
 
     def add(self, other: Score) -> None:
         for field in fields(self):
@@ -110,6 +114,14 @@ class Score:
     @property
     def precision(self) -> float:
         return self.on_labels / max(self.lines, 1)
+
+    @property
+    def strict_vertical_precision(self) -> float:
+        return self.vertical_within / max(self.vertical_lines, 1)
+
+    @property
+    def strict_precision(self) -> float:
+        return self.within / max(self.lines, 1)
 
 
 def read_truth(root: Path) -> dict[str, dict[str, float]]:
@@ -236,6 +248,23 @@ def lies_on(line: Segment, label: Label) -> bool:
     return _overlap(start, end, label.start, label.end) >= 0.5 * length
 
 
+def _distance_to_segment(point: np.ndarray, start: np.ndarray, end: np.ndarray) -> float:
+    direction = end - start
+    t = float(np.clip((point - start) @ direction / max(float(direction @ direction), 1e-12),
+                      0.0, 1.0))
+    return float(np.hypot(*(point - start - t * direction)))
+
+
+def lies_within(line: Segment, label: Label) -> bool:
+    """The stricter reading: within 1 degree of the label's direction, both ends within
+    2 px of the label itself."""
+    start, end = _ends(line)
+    if _angle_deg(end - start, label.end - label.start) > RECALL_ANGLE_DEG:
+        return False
+    return all(_distance_to_segment(point, label.start, label.end) <= DISTANCE_PX
+               for point in (start, end))
+
+
 def score(labels: Sequence[Label], lines: Sequence[Segment]) -> Score:
     """Recall of the long vertical labels and precision of ``lines`` on one image."""
     result = Score()
@@ -246,11 +275,14 @@ def score(labels: Sequence[Label], lines: Sequence[Segment]) -> Score:
             result.found += any(finds(line, label) for line in vertical)
     for line in lines:
         hit = any(lies_on(line, label) for label in labels)
+        inside = any(lies_within(line, label) for label in labels)
         result.lines += 1
         result.on_labels += hit
+        result.within += inside
         if is_vertical(line):
             result.vertical_lines += 1
             result.vertical_on_labels += hit
+            result.vertical_within += inside
     return result
 
 

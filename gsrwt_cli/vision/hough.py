@@ -35,9 +35,11 @@ DEFAULT_MAX_GAP = 10.0
 DEFAULT_MIN_LENGTH = 30.0
 
 #: A segment's ends are moved outward, by whole pixels, at most this far, while the raw
-#: gradient across the line keeps at least half its strength and its polarity: the smoothed
-#: orientation of the last few pixels before a corner turns, and they do not vote.
-MAX_END_EXTENSION = 6
+#: gradient across the line keeps at least half its strength and its polarity: the
+#: orientation of the last pixels before a corner turns, and they do not vote. The gradient
+#: (3x3 Sobel after a blur of sigma 1) sees a corner from 1 + 2 = 3 px away; further out, an
+#: edge that goes on beyond a corner would carry the end past it.
+MAX_END_EXTENSION = 3
 
 #: A segment holds at least this many edge pixels per pixel of its length (a diagonal edge
 #: one pixel thick holds 0.71): a chain of scattered texture pixels is no segment.
