@@ -18,6 +18,7 @@ import cv2
 from gsrwt_cli import View
 from gsrwt_cli.api.rectify import Framing, rectify_image
 from gsrwt_cli.vision.edges import line_edges
+from gsrwt_cli.vision.ght import MATCH_ORIENTATION_SMOOTHING
 from gsrwt_cli.vision.landmarks import build_template, match_template
 
 SAMPLES = Path(__file__).resolve().parent.parent / "sample_data"
@@ -32,7 +33,8 @@ def main() -> None:
     templates = {}
     for name in ("knob", "window"):
         cut = cv2.imread(str(SAMPLES / "templates" / f"{name}.png"), cv2.IMREAD_GRAYSCALE)
-        templates[name] = build_template(cut, edges=line_edges(cut))
+        templates[name] = build_template(
+            cut, edges=line_edges(cut, orientation_smoothing=MATCH_ORIENTATION_SMOOTHING))
     scales = (0.9, 0.95, 1.0, 1.05, 1.1)
     total = 0.0
     for name, template in templates.items():
@@ -40,7 +42,8 @@ def main() -> None:
         for _ in range(10):
             start = time.perf_counter()
             (best,) = match_template(grey, template, scales=scales, max_matches=1,
-                                     edges=line_edges(grey))
+                                     edges=line_edges(
+                                         grey, orientation_smoothing=MATCH_ORIENTATION_SMOOTHING))
             times.append(time.perf_counter() - start)
         total += min(times)
         print(f"{name:7s} {template.width}x{template.height}: {min(times) * 1000:6.1f} ms  "

@@ -22,9 +22,9 @@ from ..io.targets import Drawings
 from ..tables.rows import LINES_COLUMNS, MATCH_COLUMNS, line_row, match_row
 from ..tables.writer import TableWriter
 from ..vision.drawing import draw_lines, draw_matches
-from ..vision.edges import DEFAULT_LINE_THRESHOLD, line_edges
+from ..vision.edges import DEFAULT_LINE_THRESHOLD, DEFAULT_ORIENTATION_SMOOTHING, line_edges
 from ..vision.frontal_pixels import frontal_edges
-from ..vision.ght import DEFAULT_MATCH_THRESHOLD
+from ..vision.ght import DEFAULT_MATCH_THRESHOLD, MATCH_ORIENTATION_SMOOTHING
 from ..vision.hough import DEFAULT_MAX_GAP, DEFAULT_MIN_LENGTH, ORIENTATIONS
 from ..vision.landmarks import (
     DEFAULT_MIN_VOTES,
@@ -125,9 +125,11 @@ def _readable(
             yield view
 
 
-def _edges(view: CanonicalView, threshold: float) -> EdgeMap:
+def _edges(view: CanonicalView, threshold: float,
+           orientation_smoothing: float = DEFAULT_ORIENTATION_SMOOTHING) -> EdgeMap:
     """The edge stage of ``lines`` and ``match`` on a view (:func:`frontal_edges`)."""
-    return frontal_edges(grey8(view.pixels), view.pixel_map, view.source_size, threshold)
+    return frontal_edges(grey8(view.pixels), view.pixel_map, view.source_size, threshold,
+                         orientation_smoothing)
 
 
 def _min_length_px(view: CanonicalView, pixels: float, units: float | None) -> float | None:
@@ -174,8 +176,10 @@ def lines(images: tuple[Path, ...], sidecar: Path | None, edge_threshold: float,
     """Straight segments (door boundaries) by the Hough transform on frontal views (Sec. 5.2.2).
 
     Edges: thin hysteresis edges of the smoothed 3x3 Sobel gradient, compensated for the
-    rectification's magnification, none at the fill. Each edge pixel votes once, at its own
-    gradient orientation; each line is cut where its edge pixels have gaps. x1..y2 are the
+    rectification's magnification, none at the fill. Each edge pixel votes at its own
+    gradient orientation and as far beside it as the image's noise makes that uncertain;
+    each line is cut where its edge pixels have gaps, and a segment is kept if it stands out
+    from what lies beside it (a short one clearly, a long one may be faint). x1..y2 are the
     segment's end points in the frontal view, x1_src..y2_src in the original image.
 
     \b
@@ -265,7 +269,9 @@ def match(images: tuple[Path, ...], templates: tuple[Path, ...], sidecar: Path |
         try:
             turn = 1 if exif_orientation == "ignore" else file_orientation(path)
             grey = grey8(read_image(path, orientation=turn))
-            models.append((path, build_template(grey, edges=line_edges(grey, edge_threshold))))
+            edges = line_edges(grey, edge_threshold,
+                               orientation_smoothing=MATCH_ORIENTATION_SMOOTHING)
+            models.append((path, build_template(grey, edges=edges)))
         except (ImageError, ValueError) as error:
             raise InputError(f"--template {path}: {error}") from None
     paths = _image_paths(images)
@@ -277,7 +283,7 @@ def match(images: tuple[Path, ...], templates: tuple[Path, ...], sidecar: Path |
         picture = _drawing_target(drawings, view)
         if drawings is not None and picture is None:
             failures.append(view.path)
-        edges = _edges(view, edge_threshold)
+        edges = _edges(view, edge_threshold, MATCH_ORIENTATION_SMOOTHING)
         overlay = colour8(view.pixels) if picture is not None else None
         for path, model in models:
             found = match_template(view.pixels, model, scales=scale_list, edges=edges,

@@ -14,6 +14,7 @@ a vertical edge has ``theta`` near 0 or 180 deg and a horizontal one near 90 or 
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import cv2
@@ -34,9 +35,18 @@ DEFAULT_LINE_THRESHOLD = 25.0
 DEFAULT_SMOOTHING = 1.0
 
 #: Gaussian smoothing (sigma, pixels) of the gradient vector from which each pixel's
-#: orientation is taken (not its magnitude): on a faint edge the orientation of single pixels
-#: wanders by ten degrees and more, their mean along the edge does not.
-DEFAULT_ORIENTATION_SMOOTHING = 2.0
+#: orientation is taken (not its magnitude), beyond :data:`DEFAULT_SMOOTHING`: none, each
+#: pixel's orientation is that of its own edge. A blur of 2 px mixes in the edges beside it
+#: (the two sides of a thin bar, a window frame's second edge, the crossing edge at a
+#: corner) and turns a real photo's edges by 10 to 30 degrees there; the Hough transform of
+#: ``gsrwt lines`` allows for the orientation's noise instead, pixel by pixel
+#: (:attr:`EdgeMap.gradient_noise`). ``gsrwt match`` smooths it
+#: (:data:`~.ght.MATCH_ORIENTATION_SMOOTHING`).
+DEFAULT_ORIENTATION_SMOOTHING = 0.0
+
+#: :data:`EdgeMap.gradient_noise` is measured on the pixels at least this far (pixels, a
+#: square's half-width) from every edge pixel.
+NOISE_CLEARANCE = 3
 
 #: Hysteresis of :func:`line_edges`: a chain of edge pixels needs one pixel at the high
 #: threshold (``edge_threshold``) and keeps its pixels down to this fraction of it.
@@ -74,6 +84,12 @@ class EdgeMap:
     #: The raw 3x3 Sobel ``(gx, gy)`` of the unsmoothed image, shape ``(2, height, width)``,
     #: where segments' ends are looked for; None if not kept.
     gradient: NDArray[np.float32] | None = None
+    #: The standard deviation of each component of the gradient behind ``magnitude`` that
+    #: the image's noise and fine texture give (:func:`gradient_noise`); None if not measured.
+    gradient_noise: float | None = None
+    #: The pixels whose gradient is measured (inside the image's 1-pixel border, at least
+    #: :data:`FILL_MARGIN` px from the fill); None: all.
+    measured: NDArray[np.bool_] | None = None
 
     @property
     def support_mask(self) -> NDArray[np.bool_]:
@@ -96,6 +112,20 @@ def gradient_magnitude(gradient_x: np.ndarray, gradient_y: np.ndarray) -> NDArra
     magnitude = np.multiply(gradient_x, gradient_x, dtype=np.float32)
     magnitude += np.multiply(gradient_y, gradient_y, dtype=np.float32)
     return np.sqrt(magnitude, out=magnitude)
+
+
+def gradient_noise(magnitude: np.ndarray, edges: np.ndarray, inside: np.ndarray) -> float:
+    """The standard deviation ``sigma`` of each gradient component that noise and texture
+    give, measured where there is no edge: on the pixels of ``inside`` at least
+    :data:`NOISE_CLEARANCE` px from every pixel of ``edges``. There the magnitude of a
+    gradient of two independent normal components of deviation ``sigma`` follows Rayleigh's
+    law, whose median is ``sigma sqrt(2 ln 2)``. 0 if no pixel is left."""
+    size = 2 * NOISE_CLEARANCE + 1
+    near = cv2.dilate(edges.astype(np.uint8), np.ones((size, size), np.uint8))
+    away = magnitude[(near == 0) & inside]
+    if away.size == 0:
+        return 0.0
+    return float(np.median(away)) / math.sqrt(2.0 * math.log(2.0))
 
 
 def grey_image(image: np.ndarray) -> GreyImage:
@@ -165,7 +195,9 @@ def line_edges(
 
     ``valid``: the frontal pixels that have a source pixel; the gradient is zeroed within
     :data:`FILL_MARGIN` pixels of the others, so the border with the fill gives no edges.
-    ``magnitude`` is the compensated one; ``orientation_deg`` as in :func:`edge_map`.
+    ``magnitude`` is the compensated one, ``gradient_noise`` the deviation of its components
+    away from edges (:func:`gradient_noise`); ``orientation_deg`` as in :func:`edge_map`, of
+    the compensated gradient smoothed by ``orientation_smoothing``.
     """
     grey = grey_image(image)
     height, width = grey.shape
@@ -212,7 +244,9 @@ def line_edges(
     support = (magnitude >= low) & inside.astype(bool) & near_edges
     weight *= inside
     raw_gradient *= inside
-    return EdgeMap(magnitude, orientation, mask, support, weight, raw_gradient)
+    measured = inside.astype(bool)
+    noise = gradient_noise(magnitude, mask, measured)
+    return EdgeMap(magnitude, orientation, mask, support, weight, raw_gradient, noise, measured)
 
 
 def orientation_bin_count(step_deg: float) -> int:

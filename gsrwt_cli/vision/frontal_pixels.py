@@ -15,7 +15,13 @@ from numpy.typing import NDArray
 
 from ..geometry.gsrwt import local_stretch
 from ..geometry.pixelmap import PixelMap
-from .edges import DEFAULT_LINE_THRESHOLD, EdgeMap, grey_image, line_edges
+from .edges import (
+    DEFAULT_LINE_THRESHOLD,
+    DEFAULT_ORIENTATION_SMOOTHING,
+    EdgeMap,
+    grey_image,
+    line_edges,
+)
 
 #: Output pixels between the points where the magnification is computed (then interpolated).
 MAGNIFICATION_STEP = 16
@@ -68,12 +74,16 @@ def frontal_edges(
     pixel_map: PixelMap | None = None,
     source_size: tuple[int, int] | None = None,
     threshold: float = DEFAULT_LINE_THRESHOLD,
+    orientation_smoothing: float = DEFAULT_ORIENTATION_SMOOTHING,
 ) -> EdgeMap:
     """The edge stage of ``gsrwt lines`` and ``gsrwt match`` on a frontal view ``image``:
     :func:`~.edges.line_edges` with the view's :func:`seen` pixels and :func:`magnification`
-    when it was rectified through ``pixel_map`` from an image of ``source_size``."""
+    when it was rectified through ``pixel_map`` from an image of ``source_size``
+    (``orientation_smoothing``: ``gsrwt match`` takes
+    :data:`~.ght.MATCH_ORIENTATION_SMOOTHING`)."""
     grey = grey_image(image)
     if pixel_map is None or source_size is None:
-        return line_edges(grey, threshold)
+        return line_edges(grey, threshold, orientation_smoothing=orientation_smoothing)
     return line_edges(grey, threshold, valid=seen(pixel_map, source_size),
-                      magnification=magnification(pixel_map))
+                      magnification=magnification(pixel_map),
+                      orientation_smoothing=orientation_smoothing)

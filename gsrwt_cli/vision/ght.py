@@ -28,6 +28,12 @@ from .edges import (
 #: the edges of templates and views.
 DEFAULT_MATCH_THRESHOLD = 25.0
 
+#: ... and the Gaussian smoothing (sigma, pixels) of the gradient vector from which it takes
+#: each edge pixel's orientation (``orientation_smoothing`` of :func:`~.edges.line_edges`):
+#: on a faint edge the orientation of single pixels wanders by ten degrees and more, their
+#: mean along the edge does not.
+MATCH_ORIENTATION_SMOOTHING = 2.0
+
 #: GHT R-table orientation bin width (degrees): wide enough that Sobel orientation noise on
 #: anti-aliased curves rarely moves a pixel by more than one bin.
 DEFAULT_GHT_ORIENTATION_STEP_DEG = 4.0

@@ -1,9 +1,10 @@
 """Straight segments (door boundaries) by the one-vote-per-pixel Hough transform (Sec. 5.2.2).
 
 Every edge pixel (:mod:`.edges`) casts ONE vote, in the orientation bin of its own gradient
-direction (and the bins beside it), for the line through it with that normal. Each line of
-the accumulator is then cut into segments where its edge pixels have gaps, so that a door
-edge is reported as the door edge and not as a line across the whole view.
+direction (and the bins beside it, as far as the orientation's noise reaches), for the line
+through it with that normal. Each line of the accumulator is then cut into segments where its
+edge pixels have gaps, so that a door edge is reported as the door edge and not as a line
+across the whole view, and a segment is kept if it stands out from what lies beside it.
 Pixel coordinates and angles as in :mod:`.edges`.
 """
 
@@ -34,9 +35,11 @@ DEFAULT_MAX_GAP = 10.0
 DEFAULT_MIN_LENGTH = 30.0
 
 #: A segment's ends are moved outward, by whole pixels, at most this far, while the raw
-#: gradient across the line keeps at least half its strength and its polarity: the smoothed
-#: orientation of the last few pixels before a corner turns, and they do not vote.
-MAX_END_EXTENSION = 6
+#: gradient across the line keeps at least half its strength and its polarity: the
+#: orientation of the last pixels before a corner turns, and they do not vote. The gradient
+#: (3x3 Sobel after a blur of sigma 1) sees a corner from 1 + 2 = 3 px away; further out, an
+#: edge that goes on beyond a corner would carry the end past it.
+MAX_END_EXTENSION = 3
 
 #: A segment holds at least this many edge pixels per pixel of its length (a diagonal edge
 #: one pixel thick holds 0.71): a chain of scattered texture pixels is no segment.
@@ -47,10 +50,20 @@ MIN_FILL = 0.5
 ORIENTATION_TOLERANCE_DEG = 5.0
 ORIENTATIONS = ("all", "vertical", "horizontal")
 
-#: Each edge pixel votes in the orientation bins within this many of its own (+-4 degrees with
-#: 2-degree bins): on a straight edge that a warp has resampled, the Sobel orientation of
-#: single pixels wanders by a few degrees, and one-bin votes would split a line's support.
+#: Each edge pixel votes in the orientation bins within at least this many of its own (+-4
+#: degrees with 2-degree bins): on a straight edge that a warp has resampled, the Sobel
+#: orientation of single pixels wanders by a few degrees, and one-bin votes would split a
+#: line's support.
 DEFAULT_ORIENTATION_SPREAD_BINS = 2
+
+#: ... and in the bins within this many standard errors of its orientation, ``gradient_noise
+#: / magnitude`` radians (:attr:`~.edges.EdgeMap.gradient_noise`): the orientation of a
+#: faint edge's pixels, a few grey levels of contrast quantized to whole levels, wanders by
+#: ten degrees and more, that of a strong edge's by a degree.
+ORIENTATION_ERRORS = 2.0
+
+#: ... but in none further than this (degrees) from its own.
+MAX_ORIENTATION_TOLERANCE_DEG = 12.0
 
 #: Hough non-maximum suppression half-widths: +-2 orientation bins (wrapping), +-3 rho bins.
 HOUGH_SUPPRESSION_THETA_BINS = 2
@@ -63,6 +76,22 @@ HOUGH_VOTER_DISTANCE = 1.5
 #: faint, noisy edge wanders by a pixel or two).
 PIECE_VOTER_DISTANCE = 2.5
 
+#: A cell's line is fitted among the voters this close to it (pixels): its fits move it by a
+#: pixel or two, not more.
+NEAR_CELL_DISTANCE = 8.0
+
+#: A segment stands out from what lies beside it: the median gradient magnitude of the edge
+#: map (:attr:`~.edges.EdgeMap.magnitude`, smoothed and compensated for magnification) on
+#: its pixels is at least ``1 + CONTRAST_MARGIN * sqrt(CONTRAST_LENGTH / length)`` times the
+#: median on the pixels :data:`SURROUND_OFFSETS` px to either side: 4.9 times for a segment
+#: of 30 px, 4 times for one of 50 px, 2.2 times for one of 300 px. A short line in clutter
+#: (branches, brick, a reflection in glass, the shading of a pole) must stand out clearly;
+#: the longer a segment, the surer the comparison of the two medians, and the fainter it may
+#: be (a white door frame on a white wall, 8 grey levels under noise of 2.5). The bar
+#: depends on the image only through what lies beside each segment: a photo's clutter sets it.
+CONTRAST_MARGIN = 3.0
+CONTRAST_LENGTH = 50.0
+SURROUND_OFFSETS = (4.0, 6.0, 8.0, 10.0)
 
 
 @dataclass(frozen=True)
@@ -139,24 +168,28 @@ def hough_lines(
     """Straight segments of ``image`` by the thesis's Hough transform (Sec. 5.2.2), longest first.
 
     Edge pixels: ``edges`` if given, else :func:`~.edges.line_edges` with ``edge_threshold``
-    (thin hysteresis edges). Every edge pixel votes in the orientation bin of its own gradient
-    direction (bins of ``theta_step_deg`` centred on multiples of it, over ``[0, 360)``) and
-    the ``orientation_spread_bins`` bins on either side, once per bin, for ``rho = x
-    cos(theta) + y sin(theta)`` with ``theta`` the bin centre, rounded to bins of
-    ``rho_step``. Cells with at least ``min_votes`` votes that are the maximum of their +-(2 +
-    spread) orientation bins (wrapping) x +-3 rho bins neighbourhood are candidate lines;
-    equal counts go to the cell of lower orientation, then lower rho.
+    (thin hysteresis edges). Every edge pixel votes in the orientation bin of its own
+    gradient direction (bins of ``theta_step_deg`` centred on multiples of it, over ``[0,
+    360)``) and the bins on either side within its orientation's noise (:func:`_spread_bins`:
+    at least
+    ``orientation_spread_bins``), once per bin, for ``rho = x cos(theta) + y sin(theta)``
+    with ``theta`` the bin centre, rounded to bins of ``rho_step``. Cells with at least
+    ``min_votes`` votes that are the maximum of their +-(2 + ``orientation_spread_bins``)
+    orientation bins (wrapping) x +-3 rho bins neighbourhood are candidate lines; equal
+    counts go to the cell of lower orientation, then lower rho.
 
-    Candidates are taken strongest first (see :func:`_segments_of_cell`): the line through
-    the cell's edge pixels is fitted, cut where its edge pixels along it are more than
+    Candidates are taken strongest first (see :func:`_segments`): the line through the
+    cell's edge pixels is fitted, cut where its edge pixels along it are more than
     ``max_gap`` pixels apart, and each piece of at least ``min_length`` pixels (and
     :data:`MIN_FILL` edge pixels per pixel) is refitted on its own pixels (total least
     squares weighted by gradient magnitude, on the not-thinned ``support`` pixels: sub-pixel
-    positions) and reported. An edge pixel belongs to one segment at most: later candidates
-    skip the pixels of segments already found, so a line is not reported twice.
+    positions) and reported if it stands out from what lies beside it
+    (:data:`CONTRAST_MARGIN`). An edge pixel belongs to one segment at most: later
+    candidates skip the pixels of segments already found, so a line is not reported twice.
 
     ``orientation`` (:data:`ORIENTATIONS`) keeps only vertical or horizontal segments (normals
-    within :data:`ORIENTATION_TOLERANCE_DEG`); only their pixels vote. The refined normal
+    within :data:`ORIENTATION_TOLERANCE_DEG`) of those found among all (a pixel goes to the
+    strongest line it may belong to, whatever its orientation). The refined normal
     keeps the polarity of the cell (within 90 deg of it), so a dark-to-light vertical edge at
     ``x = 100.5`` gives ``theta ~ 0, rho ~ 100.5`` and a light-to-dark one ``theta ~ 180,
     rho ~ -100.5``. Segments come sorted by length (descending), at most ``max_lines``.
@@ -173,18 +206,18 @@ def hough_lines(
     spread = min(max(int(orientation_spread_bins), 0), (theta_bin_count - 1) // 2)
     theta_bin = bin_of_orientation(edges.orientation_deg[rows, cols], theta_step_deg,
                                   theta_bin_count)
-    if orientation != "all":
-        near = orientation_allows(theta_bin * theta_step_deg, orientation,
-                                  ORIENTATION_TOLERANCE_DEG + (spread + 1) * theta_step_deg)
-        rows, cols, theta_bin = rows[near], cols[near], theta_bin[near]
-        if cols.size == 0:
-            return []
+    pixel_spread = _spread_bins(edges, rows, cols, theta_step_deg, spread, theta_bin_count)
     x = cols.astype(np.float64)
     y = rows.astype(np.float64)
     bin_theta = np.radians(np.arange(theta_bin_count) * theta_step_deg)
     bin_cos, bin_sin = np.cos(bin_theta), np.sin(bin_theta)
-    vote_bin = (theta_bin[None, :] + np.arange(-spread, spread + 1)[:, None]) % theta_bin_count
-    rho = x * bin_cos[vote_bin] + y * bin_sin[vote_bin]
+    widest = int(pixel_spread.max())
+    shifts = np.arange(-widest, widest + 1)[:, None]
+    vote_bin = (theta_bin[None, :] + shifts) % theta_bin_count
+    counted = np.abs(shifts) <= pixel_spread[None, :]  # each pixel's own spread
+    vote_bin = vote_bin[counted]
+    rho = np.broadcast_to(x, counted.shape)[counted] * bin_cos[vote_bin] + np.broadcast_to(
+        y, counted.shape)[counted] * bin_sin[vote_bin]
 
     height, width = edges.mask.shape
     rho_offset = int(math.ceil(math.hypot(width, height) / rho_step)) + 1
@@ -192,7 +225,7 @@ def hough_lines(
     rho_bin = np.rint(rho / rho_step).astype(np.int64) + rho_offset
     cell = vote_bin * rho_bin_count + rho_bin
     cell_count = theta_bin_count * rho_bin_count
-    votes = np.bincount(cell.ravel(), minlength=cell_count)
+    votes = np.bincount(cell, minlength=cell_count)
 
     # Unique keys (votes first, then the lower cell index) make the local maxima unambiguous.
     key = votes * cell_count + (cell_count - 1 - np.arange(cell_count))
@@ -206,42 +239,110 @@ def hough_lines(
     if peak_cells.size == 0:
         return []
     peak_cells = peak_cells[np.argsort(-key.ravel()[peak_cells], kind="stable")]
-    support_rows, support_cols = np.nonzero(edges.support_mask)
-    support = _Pixels(support_cols.astype(np.float64), support_rows.astype(np.float64),
-                      bin_of_orientation(edges.orientation_deg[support_rows, support_cols],
-                                         theta_step_deg, theta_bin_count),
-                      edges.fit_weight[support_rows, support_cols].astype(np.float64),
-                      theta_bin_count)
+    support = _Support(edges, theta_step_deg, theta_bin_count, spread)
     voters = _Pixels(x, y, theta_bin, edges.magnitude[rows, cols].astype(np.float64),
-                     theta_bin_count)
+                     theta_bin_count, pixel_spread)
     found = _segments(peak_cells, rho_bin_count, rho_offset, rho_step, theta_step_deg,
-                      voters, support, max(spread, 1), float(max_gap), float(min_length),
-                      max(int(min_votes), 1), edges.gradient)
+                      voters, support, max(widest, 1), float(max_gap), float(min_length),
+                      max(int(min_votes), 1), edges.gradient, edges.magnitude,
+                      edges.measured)
     found = [line for line in found if orientation_allows(line.theta_deg, orientation)]
     found.sort(key=lambda line: -line.length)
     return found if max_lines is None else found[:max_lines]
 
 
+def _spread_bins(edges: EdgeMap, rows: np.ndarray, cols: np.ndarray, theta_step_deg: float,
+                 spread: int, bin_count: int) -> np.ndarray:
+    """How many orientation bins on either side of its own each pixel ``(rows, cols)`` votes
+    in: its orientation's :data:`ORIENTATION_ERRORS` standard errors (``gradient_noise /
+    magnitude`` radians), at least ``spread`` bins, at most
+    :data:`MAX_ORIENTATION_TOLERANCE_DEG`; ``spread`` everywhere if the noise is unknown."""
+    widest = max(spread, int(MAX_ORIENTATION_TOLERANCE_DEG // theta_step_deg))
+    widest = min(widest, (bin_count - 1) // 2)
+    if edges.gradient_noise is None or not edges.gradient_noise > 0:
+        return np.full(rows.size, spread, np.int64)
+    magnitude = edges.magnitude[rows, cols].astype(np.float64)
+    with np.errstate(divide="ignore"):
+        tolerance = np.degrees(ORIENTATION_ERRORS * edges.gradient_noise / magnitude)
+    return np.clip(np.ceil(tolerance / theta_step_deg), spread, widest).astype(np.int64)
+
+
+class _Support:
+    """The ``support`` pixels of an edge map (:attr:`~.edges.EdgeMap.support_mask`) with
+    their orientation bins, spreads (as :func:`_spread_bins`) and fit weights, as images:
+    those near a line are looked up along it, not searched among all of them."""
+
+    def __init__(self, edges: EdgeMap, theta_step_deg: float, bin_count: int,
+                 spread: int) -> None:
+        self.mask = edges.support_mask
+        rows, cols = np.nonzero(self.mask)
+        self.theta_bin = np.zeros(self.mask.shape, np.int64)
+        self.theta_bin[rows, cols] = bin_of_orientation(edges.orientation_deg[rows, cols],
+                                                        theta_step_deg, bin_count)
+        self.spread = np.zeros(self.mask.shape, np.int64)
+        self.spread[rows, cols] = _spread_bins(edges, rows, cols, theta_step_deg, spread,
+                                               bin_count)
+        self.weight = edges.fit_weight
+        self.bin_count = bin_count
+
+    def near(self, theta: float, rho: float, first: float, last: float, distance: float,
+             theta_bin: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``x``, ``y`` and weights of the support pixels within ``distance`` of the line
+        ``(theta, rho)`` between ``first`` and ``last`` along it, whose orientation is within
+        their own spread of bin ``theta_bin``."""
+        c, s = math.cos(theta), math.sin(theta)
+        height, width = self.mask.shape
+        # Walk the line's major axis pixel by pixel; across it, the pixels of the band.
+        steep = abs(c) >= abs(s)  # normal mostly along x: the line runs down the rows
+        ends = (np.array([rho * s + first * c, rho * s + last * c]) if steep
+                else np.array([rho * c - first * s, rho * c - last * s]))
+        lo, hi = math.floor(ends.min() - distance - 1), math.ceil(ends.max() + distance + 1)
+        major = np.arange(max(lo, 0), min(hi, (height if steep else width) - 1) + 1)
+        normal, other = (c, s) if steep else (s, c)
+        centre = (rho - major * other) / normal  # the line's minor coordinate there
+        half_width = math.ceil(distance / abs(normal)) + 1
+        minor = np.rint(centre)[:, None].astype(np.int64) + np.arange(-half_width,
+                                                                      half_width + 1)
+        major = np.broadcast_to(major[:, None], minor.shape)
+        rows, cols = (major, minor) if steep else (minor, major)
+        inside = (cols >= 0) & (cols < width) & (rows >= 0) & (rows < height)
+        rows, cols = rows[inside], cols[inside]
+        half = self.bin_count // 2
+        off = np.abs((self.theta_bin[rows, cols] - theta_bin + half) % self.bin_count - half)
+        keep = self.mask[rows, cols] & (off <= self.spread[rows, cols])
+        rows, cols = rows[keep], cols[keep]
+        px, py = cols.astype(np.float64), rows.astype(np.float64)
+        pixel_along, pixel_across = _along_and_across(px, py, theta, rho)
+        keep = ((np.abs(pixel_across) <= distance) & (pixel_along >= first)
+                & (pixel_along <= last))
+        return px[keep], py[keep], self.weight[rows[keep], cols[keep]].astype(np.float64)
+
+
 class _Pixels:
-    """Edge pixels ``x``, ``y`` with their orientation bins and weights, indexed by bin."""
+    """Edge pixels ``x``, ``y`` with their orientation bins, weights and spreads (how many
+    bins on either side of their own they belong to), indexed by bin."""
 
     def __init__(self, x: np.ndarray, y: np.ndarray, theta_bin: np.ndarray, weight: np.ndarray,
-                 bin_count: int) -> None:
+                 bin_count: int, spread: np.ndarray) -> None:
         self.x, self.y, self.weight = x, y, weight
+        self.theta_bin, self.spread = theta_bin, spread
         self.order = np.argsort(theta_bin, kind="stable")
         self.bin_starts = np.searchsorted(theta_bin[self.order], np.arange(bin_count + 1))
         self.bin_count = bin_count
         self._near: dict[tuple[int, int], np.ndarray] = {}
 
     def near_bin(self, theta_bin: int, spread_bins: int) -> np.ndarray:
-        """Indices of the pixels in the bins within ``spread_bins`` of ``theta_bin``
-        (kept: many candidate lines share a bin)."""
+        """Indices of the pixels in the bins within ``spread_bins`` of ``theta_bin`` and
+        within their own spread of it (kept: many candidate lines share a bin)."""
         key = (theta_bin, spread_bins)
         if key not in self._near:
-            self._near[key] = np.concatenate([
+            near = np.concatenate([
                 self.order[self.bin_starts[b]:self.bin_starts[b + 1]]
                 for b in compatible_bins(theta_bin, spread_bins, self.bin_count)
             ])
+            half = self.bin_count // 2
+            off = np.abs((self.theta_bin[near] - theta_bin + half) % self.bin_count - half)
+            self._near[key] = near[off <= self.spread[near]]
         return self._near[key]
 
 
@@ -279,22 +380,23 @@ def _weighted_line_fit(
 
 def _segments(
     peak_cells: np.ndarray, rho_bin_count: int, rho_offset: int, rho_step: float,
-    theta_step_deg: float, voters: _Pixels, support: _Pixels, spread_bins: int,
+    theta_step_deg: float, voters: _Pixels, support: _Support, spread_bins: int,
     max_gap: float, min_length: float, min_votes: int = 1,
-    gradient: np.ndarray | None = None,
+    gradient: np.ndarray | None = None, magnitude: np.ndarray | None = None,
+    measured: np.ndarray | None = None,
 ) -> list[Line]:
     """The segments of the Hough cells ``peak_cells`` (strongest first); a loop over cells.
 
-    For each cell: its line is fitted through its free voters (edge pixels of the cell's and
-    the ``spread_bins`` neighbouring orientation bins within 1.5 px, at least half a rho
-    bin, of the line; total least squares weighted by gradient magnitude, three passes, as the
-    cell's line may sit a degree and a pixel off the edge). The support pixels of the same
-    bins within 1.5 px of the fitted line are sorted along it and cut where consecutive ones
-    are more than ``max_gap`` apart (a thin chain of edge pixels on a faint, noisy edge
-    wanders; the thicker support band around it does not break). Each piece long enough is
-    refitted (:func:`_piece`), and its voters are taken: no later cell uses them; a cell
-    left with fewer than ``min_votes`` free voters near its line is dropped. Each step is
-    vectorized over the pixels of a few bins.
+    For each cell: its line is fitted through its free voters (edge pixels whose orientation
+    is within their own spread of the cell's, within 1.5 px, at least half a rho bin, of the
+    line; total least squares weighted by gradient magnitude, three passes, as the cell's
+    line may sit a degree and a pixel off the edge). The free voters within
+    :data:`PIECE_VOTER_DISTANCE` of the fitted line (the thin chain of a faint, noisy edge
+    wanders) are sorted along it and cut where consecutive ones are more than ``max_gap``
+    apart. Each piece long enough that stands out from what lies beside it
+    (:func:`_stands_out`) is refitted (:func:`_piece`), and its voters are taken: no later
+    cell uses them; a cell left with fewer than ``min_votes`` free voters near its line is
+    dropped. Each step is vectorized over the pixels of a few bins.
     """
     voter_distance = max(HOUGH_VOTER_DISTANCE, 0.5 * rho_step)
     free = np.ones(voters.x.size, bool)
@@ -305,7 +407,9 @@ def _segments(
         theta, rho = cell_theta, (peak_rho_bin - rho_offset) * rho_step
         nearby = voters.near_bin(peak_theta_bin, spread_bins)
         nearby = nearby[free[nearby]]
-        if nearby.size < 2:
+        _, across = _along_and_across(voters.x[nearby], voters.y[nearby], theta, rho)
+        nearby = nearby[np.abs(across) <= NEAR_CELL_DISTANCE]
+        if nearby.size < max(2, min_votes):  # too few left for the test below
             continue
         near_x, near_y, near_weight = voters.x[nearby], voters.y[nearby], voters.weight[nearby]
         close = np.zeros(nearby.size, bool)
@@ -318,15 +422,10 @@ def _segments(
                                             cell_theta)
         if np.count_nonzero(close) < max(2, min_votes):
             continue
-        support_near = support.near_bin(peak_theta_bin, spread_bins)
-        support_along, support_across = _along_and_across(
-            support.x[support_near], support.y[support_near], theta, rho)
-        band = np.abs(support_across) <= voter_distance + 2.0  # where refits may look
-        support_near, support_along = support_near[band], support_along[band]
-        along = np.sort(support_along[np.abs(support_across[band]) <= voter_distance])
+        voter_along, voter_across = _along_and_across(near_x, near_y, theta, rho)
+        along = np.sort(voter_along[np.abs(voter_across) <= PIECE_VOTER_DISTANCE])
         if along.size < 2:
             continue
-        voter_along, voter_across = _along_and_across(near_x, near_y, theta, rho)
         voter_band = np.abs(voter_across) <= PIECE_VOTER_DISTANCE + 2.0
         nearby, voter_along = nearby[voter_band], voter_along[voter_band]
         cuts = np.flatnonzero(np.diff(along) > max_gap) + 1
@@ -336,10 +435,14 @@ def _segments(
             first, last = float(along[start]), float(along[end])
             if last - first < min_length - 1e-9:
                 continue
-            pixels = support_near[(support_along >= first - 2.0) & (support_along <= last + 2.0)]
+            if magnitude is not None and not _stands_out(magnitude, measured, theta, rho,
+                                                         first, last):
+                continue
+            pixels = support.near(theta, rho, first - 2.0, last + 2.0, voter_distance + 2.0,
+                                  peak_theta_bin)
             members = nearby[(voter_along >= first - 3.0) & (voter_along <= last + 3.0)]
-            line = _piece(theta, rho, cell_theta, first, last, voters, members, support,
-                          pixels, voter_distance, free, gradient)
+            line = _piece(theta, rho, cell_theta, first, last, voters, members, pixels,
+                          voter_distance, free, gradient, measured)
             if line is not None and line.length >= min_length - 1e-9:
                 lines.append(line)
     return lines
@@ -347,8 +450,9 @@ def _segments(
 
 def _piece(
     theta: float, rho: float, cell_theta: float, first: float, last: float, voters: _Pixels,
-    members: np.ndarray, support: _Pixels, pixels: np.ndarray, voter_distance: float,
-    free: np.ndarray, gradient: np.ndarray | None = None,
+    members: np.ndarray, pixels: tuple[np.ndarray, np.ndarray, np.ndarray],
+    voter_distance: float, free: np.ndarray, gradient: np.ndarray | None = None,
+    measured: np.ndarray | None = None,
 ) -> Line | None:
     """One segment between ``first`` and ``last`` along the line ``(theta, rho)``.
 
@@ -360,9 +464,11 @@ def _piece(
     they are then taken (marked in ``free``). None if they are fewer than :data:`MIN_FILL`
     per pixel of its length. With the raw ``gradient``, each end then moves outward by whole
     pixels (at most :data:`MAX_END_EXTENSION`) while the gradient across the line, sampled
-    on it, keeps half the median strength of its voters, with their polarity.
+    on it, keeps half the median strength of its voters, with their polarity; with the
+    ``measured`` pixels, each end then moves inward until it lies on one
+    (:func:`_measured_ends`).
     """
-    sx, sy, sw = support.x[pixels], support.y[pixels], support.weight[pixels]
+    sx, sy, sw = pixels
     for _ in range(2):
         along, across = _along_and_across(sx, sy, theta, rho)
         inside = (np.abs(across) <= voter_distance) & (along >= first - 0.5) & (
@@ -377,8 +483,8 @@ def _piece(
     members, along = members[keep], along[keep]
     if members.size < max(2.0, MIN_FILL * (last - first)):
         return None
-    free[members] = False
     first, last = float(along.min()), float(along.max())
+    free[members] = False
     c, s = math.cos(theta), math.sin(theta)
     if gradient is not None:
         cols, rows = voters.x[members].astype(np.int64), voters.y[members].astype(np.int64)
@@ -386,12 +492,63 @@ def _piece(
         if strength > 0:
             before, after = _extensions(gradient, theta, rho, first, last, strength)
             first, last = first - before, last + after
+    if measured is not None:
+        first, last = _measured_ends(measured, theta, rho, first, last)
     return Line(
         rho=float(rho), theta_deg=math.degrees(theta) % 360.0, votes=int(members.size),
         x1=rho * c - first * s, y1=rho * s + first * c,
         x2=rho * c - last * s, y2=rho * s + last * c,
         length=last - first, contrast=float(np.median(voters.weight[members])),
     )
+
+
+def _stands_out(magnitude: np.ndarray, measured: np.ndarray | None, theta: float, rho: float,
+                first: float, last: float) -> bool:
+    """Whether the segment from ``first`` to ``last`` along the line ``(theta, rho)``
+    stands out from what lies beside it (:data:`CONTRAST_MARGIN`): the gradient
+    ``magnitude`` at the pixels on it against that at the pixels :data:`SURROUND_OFFSETS`
+    px to either side (medians of the ``measured`` pixels, all if None). Not if either side
+    is mostly unmeasured :data:`SURROUND_OFFSETS` ``[0]`` px away: the segment runs along
+    the border of the image or of the fill."""
+    c, s = math.cos(theta), math.sin(theta)
+    along = np.arange(first, last + 0.5, 1.0)
+    offsets = np.array([0.0, *SURROUND_OFFSETS, *(-v for v in SURROUND_OFFSETS)])[:, None]
+    height, width = magnitude.shape
+    cols = np.rint(rho * c - along * s + offsets * c).astype(np.int64)
+    rows = np.rint(rho * s + along * c + offsets * s).astype(np.int64)
+    seen = (cols >= 0) & (cols < width) & (rows >= 0) & (rows < height)
+    np.clip(rows, 0, height - 1, out=rows)
+    np.clip(cols, 0, width - 1, out=cols)
+    if measured is not None:
+        seen &= measured[rows, cols]
+    nearest = 1 + len(SURROUND_OFFSETS)  # the row of -SURROUND_OFFSETS[0]
+    half = 0.5 * along.size
+    if not (np.count_nonzero(seen[1]) >= half and np.count_nonzero(seen[nearest]) >= half
+            and seen[0].any()):
+        return False
+    sampled = magnitude[rows, cols]
+    strength = float(np.median(sampled[0][seen[0]]))
+    surround = float(np.median(sampled[1:][seen[1:]]))
+    margin = 1.0 + CONTRAST_MARGIN * math.sqrt(CONTRAST_LENGTH / max(last - first, 1.0))
+    return strength > 0 and strength >= margin * surround
+
+
+def _measured_ends(measured: np.ndarray, theta: float, rho: float, first: float,
+                   last: float) -> tuple[float, float]:
+    """The ends ``first`` and ``last`` along the line ``(theta, rho)`` moved inward, by
+    half pixels and at most :data:`PIECE_VOTER_DISTANCE` + 1 px, until each lies on a
+    ``measured`` pixel: an end projected from an edge pixel beside the line may fall outside
+    the image or on the fill."""
+    c, s = math.cos(theta), math.sin(theta)
+    inward = np.arange(0.0, PIECE_VOTER_DISTANCE + 1.25, 0.5)
+    along = np.concatenate([first + inward, last - inward])
+    cols = np.rint(rho * c - along * s).astype(np.int64)
+    rows = np.rint(rho * s + along * c).astype(np.int64)
+    height, width = measured.shape
+    inside = (cols >= 0) & (cols < width) & (rows >= 0) & (rows < height)
+    on = (inside & measured[np.where(inside, rows, 0), np.where(inside, cols, 0)]).reshape(2, -1)
+    steps = np.where(on.any(axis=1), on.argmax(axis=1), 0)
+    return first + float(inward[steps[0]]), last - float(inward[steps[1]])
 
 
 def _extensions(gradient: np.ndarray, theta: float, rho: float, first: float, last: float,
