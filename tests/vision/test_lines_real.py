@@ -13,8 +13,6 @@ a brick wall, and the gradient noise that sets how far each pixel's vote spreads
 
 from __future__ import annotations
 
-import csv
-import io
 import sys
 from pathlib import Path
 from types import SimpleNamespace
@@ -27,6 +25,7 @@ from gsrwt_cli.vision.edges import line_edges
 from gsrwt_cli.vision.hough import hough_lines
 from tests.helpers.cli import run_gsrwt
 from tests.helpers.paths import ROOT
+from tests.helpers.tables import read_table
 
 sys.path.insert(0, str(ROOT / "benchmarks"))
 import lines_measure  # noqa: E402
@@ -41,7 +40,7 @@ def lines_of(*args: str) -> dict[str, list[SimpleNamespace]]:
     result = run_gsrwt("lines", *args, "--format", "csv")
     assert result.returncode == 0, result.stderr
     found: dict[str, list[SimpleNamespace]] = {}
-    for row in csv.DictReader(io.StringIO(result.stdout)):
+    for row in read_table(result.stdout):
         values = {key: float(value) for key, value in row.items() if key != "image" and value}
         found.setdefault(Path(row["image"]).name, []).append(SimpleNamespace(**values))
     return found
