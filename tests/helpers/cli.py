@@ -13,6 +13,9 @@ import subprocess
 import sys
 from collections.abc import Mapping
 from pathlib import Path
+from types import SimpleNamespace
+
+from tests.helpers.tables import read_table
 
 #: The installed console script of this environment.
 GSRWT = Path(sys.executable).with_name("gsrwt")
@@ -66,3 +69,14 @@ def run_gsrwt_measuring_memory(*args: Argument, cwd: Path | None = None
                          text=True, cwd=cwd, timeout=300)
     return (subprocess.CompletedProcess([GSRWT, *args], run.returncode, "", run.stdout),
             int(run.stderr.split()[-1]))
+
+
+def lines_of(*args: str) -> dict[str, list[SimpleNamespace]]:
+    """``gsrwt lines ARGS --format csv`` (one real run), its rows per image file name."""
+    result = run_gsrwt("lines", *args, "--format", "csv")
+    assert result.returncode == 0, result.stderr
+    found: dict[str, list[SimpleNamespace]] = {}
+    for row in read_table(result.stdout):
+        values = {key: float(value) for key, value in row.items() if key != "image" and value}
+        found.setdefault(Path(row["image"]).name, []).append(SimpleNamespace(**values))
+    return found

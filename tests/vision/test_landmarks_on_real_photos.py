@@ -11,7 +11,6 @@ vertical and >= 0.45 for all lines); the tighter bounds are a little under what 
 
 from __future__ import annotations
 
-from pathlib import Path
 from types import SimpleNamespace
 
 import cv2
@@ -31,10 +30,9 @@ from tests.helpers.chessboard_edges import (
     photos,
     score,
 )
-from tests.helpers.cli import run_gsrwt
+from tests.helpers.cli import lines_of, run_gsrwt
 from tests.helpers.door_renders import door_views
 from tests.helpers.paths import SAMPLE_VIEWS as SAMPLES
-from tests.helpers.tables import read_table
 
 POSES = ["--sidecar", str(DATA / "right_poses.csv"), "--camera", str(DATA / "right_camera.yml")]
 
@@ -42,17 +40,6 @@ POSES = ["--sidecar", str(DATA / "right_poses.csv"), "--camera", str(DATA / "rig
 @pytest.fixture(scope="module")
 def boards():
     return {view.path.name: label(view) for view in frontal_views()}
-
-
-def lines_of(*args: str) -> dict[str, list[SimpleNamespace]]:
-    """``gsrwt lines ARGS --format csv`` (one real run), its rows per image file name."""
-    result = run_gsrwt("lines", *args, "--format", "csv")
-    assert result.returncode == 0, result.stderr
-    found: dict[str, list[SimpleNamespace]] = {}
-    for row in read_table(result.stdout):
-        values = {key: float(value) for key, value in row.items() if key != "image" and value}
-        found.setdefault(Path(row["image"]).name, []).append(SimpleNamespace(**values))
-    return found
 
 
 def total_score(boards, found) -> Score:

@@ -14,8 +14,6 @@ a brick wall, and the gradient noise that sets how far each pixel's vote spreads
 from __future__ import annotations
 
 import sys
-from pathlib import Path
-from types import SimpleNamespace
 
 import cv2
 import numpy as np
@@ -23,9 +21,8 @@ import pytest
 
 from gsrwt_cli.vision.edges import line_edges
 from gsrwt_cli.vision.hough import hough_lines
-from tests.helpers.cli import run_gsrwt
+from tests.helpers.cli import lines_of
 from tests.helpers.paths import ROOT
-from tests.helpers.tables import read_table
 
 sys.path.insert(0, str(ROOT / "benchmarks"))
 import lines_measure  # noqa: E402
@@ -33,17 +30,6 @@ import lines_measure  # noqa: E402
 YORK = lines_measure.DEFAULT_ROOT
 needs_york = pytest.mark.skipif(not (YORK / "truth.csv").is_file(),
                                 reason=f"York Urban training half not at {YORK}")
-
-
-def lines_of(*args: str) -> dict[str, list[SimpleNamespace]]:
-    """``gsrwt lines ARGS --format csv`` (one real run), its rows per image file name."""
-    result = run_gsrwt("lines", *args, "--format", "csv")
-    assert result.returncode == 0, result.stderr
-    found: dict[str, list[SimpleNamespace]] = {}
-    for row in read_table(result.stdout):
-        values = {key: float(value) for key, value in row.items() if key != "image" and value}
-        found.setdefault(Path(row["image"]).name, []).append(SimpleNamespace(**values))
-    return found
 
 
 @pytest.mark.slow
