@@ -38,7 +38,13 @@ def test_sample_views_are_what_render_makes_of_the_texture(tmp_path):
     for row in VIEWS:
         ours = cv2.imread(str(tmp_path / row["image"])).astype(int)
         committed = cv2.imread(str(SAMPLES / "views" / row["image"])).astype(int)
-        assert np.abs(ours - committed).max() <= 1, row["image"]
+        difference = np.abs(ours - committed)
+        if row["image"].endswith(".png"):
+            assert difference.max() <= 1, row["image"]
+        else:
+            # JPEG: OpenCV's releases bundle different encoders (5.0 and 5.1 differ by up to 6
+            # levels at 0.025 % of values, measured); a warp that moved would differ at many.
+            assert difference.max() <= 12 and (difference > 1).mean() < 1e-3, row["image"]
 
 
 @pytest.mark.slow
