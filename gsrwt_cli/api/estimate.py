@@ -715,8 +715,7 @@ def estimate_pose(
         camera = Intrinsics(camera.fx, camera.fy, camera.cx, camera.cy, camera.skew,
                             width, height, camera.lens)
         if camera.lens is not None:
-            ideal = np.hstack([camera.ideal_pixels(detected[:, :2]),
-                               camera.ideal_pixels(detected[:, 2:])])
+            ideal = camera.ideal_pixels(detected.reshape(-1, 2)).reshape(-1, 4)
             reached = np.all(np.isfinite(ideal), axis=1)  # none beyond the lens's fold
             detected, ideal = detected[reached], ideal[reached]
         return _estimate_known_focal(detected, ideal, camera, inlier_px, segments, False, wall)
