@@ -50,6 +50,9 @@ from .in_order import run_in_order
 from .job_errors import error_text
 from .workers import ProcessWorker
 
+#: How ``--auto`` finds a pose: from the image's lines, or from a document's corners.
+AUTO_MODES = ("lines", "document")
+
 #: Fields of a record that give a pose: an estimate ignores them (it makes its own).
 _POSE_VALUES = ("pan", "tilt", "roll", *GSRWT_FIELDS, *POSE_FIELDS)
 
@@ -65,10 +68,15 @@ class EstimateOptions:
     max_input_pixels: float = DEFAULT_MAX_INPUT_PIXELS
     #: ``exif``: the photo as its EXIF orientation displays it; ``ignore``: the stored pixels.
     orientation: str = "exif"
+    #: ``lines``: the pose from the image's lines; ``document``: from the corners of the
+    #: largest clear quadrilateral of strong edges (:mod:`~gsrwt_cli.vision.document`).
+    mode: str = "lines"
 
     def __post_init__(self) -> None:
         if self.wall not in WALL_CHOICES:
             raise ValueError(f"wall must be one of {', '.join(WALL_CHOICES)}")
+        if self.mode not in AUTO_MODES:
+            raise ValueError(f"mode must be one of {', '.join(AUTO_MODES)}")
 
 
 def camera_for(path: Path, values: Mapping[str, Any], where: str, orientation: int = 1
@@ -192,6 +200,24 @@ def guided_row(path: Path, values: Mapping[str, Any], where: str, orientation: i
     return row
 
 
+def document_values(path: Path, values: Mapping[str, Any], options: EstimateOptions
+                    ) -> dict[str, Any]:
+    """``values`` (their pose left out) with the ``corners`` of the document the image shows
+    (``--auto document``: :func:`~gsrwt_cli.vision.document.find_document`), in the photo as
+    displayed. Raises :class:`~gsrwt_cli.api.estimate.EstimateError`, saying why, when there
+    is no clear one."""
+    from ..vision.document import DocumentError, find_document  # only when asked for
+
+    image = read_image(path, options.max_input_pixels, orientation_of(path, options))
+    try:
+        found = find_document(image)
+    except DocumentError as error:
+        raise EstimateError(str(error)) from None
+    own = {name: value for name, value in values.items() if name not in _POSE_VALUES}
+    own["corners"] = found.corners_text()
+    return own
+
+
 def estimated_view_values(path: Path, values: Mapping[str, Any], where: str,
                           options: EstimateOptions) -> tuple[dict[str, Any], str, float]:
     """An image's values with its pose estimated (``rectify --auto``): the values (lens and
@@ -242,8 +268,12 @@ def process_estimate(job: EstimateJob, options: EstimateOptions,
             warnings.simplefilter("ignore")
             if job.error is not None:
                 raise EstimateError(job.error)
-            if has_guides(job.values):
-                row.update(guided_row(job.source, job.values, job.where,
+            if has_guides(job.values) or options.mode == "document":
+                values = job.values
+                if not has_guides(values):
+                    values = document_values(job.source, values, options)
+                    row["corners"] = values["corners"]
+                row.update(guided_row(job.source, values, job.where,
                                       orientation_of(job.source, options)), status="ok")
                 return row
             estimate, camera, source, image = estimate_file(job.source, job.values, job.where,

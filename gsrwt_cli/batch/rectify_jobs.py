@@ -35,9 +35,14 @@ from ..imaging.images import (
     measure_image_file,
 )
 from ..inputs.focal import with_focal
-from ..inputs.guides import has_guides, parse_corners
+from ..inputs.guides import parse_corners
 from ..inputs.parameters import Found, NotFound, Problem, resolve_parameters
-from ..inputs.records import RecordError, guided_view_values, view_from_values
+from ..inputs.records import (
+    RecordError,
+    guided_view_values,
+    guides_give_pose,
+    view_from_values,
+)
 from ..inputs.sidecar import Sidecar
 from ..inputs.sources import Source
 from ..io.outputs import OutsideOutputError, check_inside, remove_stale_temporaries, write_atomic
@@ -144,33 +149,45 @@ def _orientation_cell(orientation: int | None) -> str:
 
 
 def _view(job: Job, estimate: bool = True, orientation: int | None = None
-          ) -> tuple[View, str, dict[str, Any]]:
-    """The job's view, where its focal length came from (EXIF read here if needed) and its
-    ``pose_source`` and ``confidence`` columns; an estimated pose is estimated here (unless
-    not ``estimate``: then it is an error). ``orientation``: the image's EXIF orientation,
-    applied (the view of the displayed photo; None or 1: of the stored pixels)."""
+          ) -> tuple[View, str, dict[str, Any], str | None]:
+    """The job's view, where its focal length came from (EXIF read here if needed), its
+    ``pose_source``, ``confidence``, ``aspect`` and ``aspect_source`` columns, and the
+    corners of a rectangle its pose was found from (``--corners``, or those of a document
+    found by ``--auto document``; None without). An estimated pose is estimated here
+    (unless not ``estimate``: then it is an error). ``orientation``: the image's EXIF
+    orientation, applied (the view of the displayed photo; None or 1: of the stored
+    pixels)."""
     if job.error is not None:
         raise JobError(job.error)
     assert job.values is not None
+    values = job.values
     if job.pose_source == "estimated":
         if not estimate:
             raise JobError("its pose was not estimated")
-        from .estimate_jobs import estimated_view_values  # the estimator, only when asked for
+        from .estimate_jobs import (  # the estimator, only when asked for
+            document_values,
+            estimated_view_values,
+        )
 
-        values, found, confidence = estimated_view_values(job.source, job.values, job.where,
-                                                          job.estimate)
-        try:
-            view = view_from_values(values, job.where, orientation or 1)
-        except RecordError as error:
-            raise JobError(str(error)) from None
-        return view, found, {"pose_source": "estimated", "confidence": confidence}
-    values, source = with_focal(job.source, job.values, job.where, orientation or 1)
-    guided = has_guides(values)
+        if job.estimate.mode == "document":
+            values = document_values(job.source, values, job.estimate)
+        else:
+            values, found, confidence = estimated_view_values(job.source, values, job.where,
+                                                              job.estimate)
+            try:
+                view = view_from_values(values, job.where, orientation or 1)
+            except RecordError as error:
+                raise JobError(str(error)) from None
+            return view, found, {"pose_source": "estimated", "confidence": confidence}, None
+    values, source = with_focal(job.source, values, job.where, orientation or 1)
+    guided = guides_give_pose(values)
     if source is None and not guided:
         raise JobError(
             "no focal length: none in the parameters, no camera file, and no usable "
             "focal length in the image's EXIF"
         )
+    corners = values.get("corners")
+    columns: dict[str, Any] = {"pose_source": job.pose_source}
     try:
         if guided:  # the pose the guides show; the focal length too when nothing gives one
             if values.get("width") in (None, "") and values.get("cx") in (None, ""):
@@ -178,10 +195,11 @@ def _view(job: Job, estimate: bool = True, orientation: int | None = None
                 if size is not None:
                     values["width"], values["height"] = displayed_size(orientation or 1,
                                                                           *size)
-            values, columns = guided_view_values(values, job.where, orientation or 1)
-            source = columns.get("focal_source", source)
-        return (view_from_values(values, job.where, orientation or 1), source,
-                {"pose_source": job.pose_source})
+            values, found = guided_view_values(values, job.where, orientation or 1)
+            source = found.pop("focal_source", source)
+            columns.update(found)
+        return (view_from_values(values, job.where, orientation or 1), source, columns,
+                None if corners in (None, "") else str(corners))
     except RecordError as error:
         raise JobError(str(error)) from None
 
@@ -192,8 +210,11 @@ def _geometry(info: Plan) -> dict[str, Any]:
 
 def _made_with(job: Job, settings: Settings) -> str | None:
     """The ``made_with`` cell of the job's output (:func:`~gsrwt_cli.batch.reruns.made_with`)."""
-    wall = job.estimate.wall if job.estimate is not None else None
-    return made_with(job.values, wall, settings, job.output.suffix)
+    estimate = job.estimate
+    if estimate is not None and estimate.mode == "document":
+        return made_with(job.values, None, settings, job.output.suffix, auto="document")
+    return made_with(job.values, estimate.wall if estimate is not None else None, settings,
+                     job.output.suffix)
 
 
 #: The error of an existing output that no record vouches for and these options do not make.
@@ -202,11 +223,11 @@ NOT_MADE_SO = ("its output exists, not made with these options (no valid row of 
 NOT_A_FILE = "its output exists and is not a regular file; remove it or use another -o"
 
 
-def _framed(job: Job, settings: Settings) -> Settings:
-    """The settings of one image: with ``--bbox corners``, its corners in the framing."""
+def _framed(settings: Settings, text: str | None) -> Settings:
+    """The settings of one image: with ``--bbox corners``, its corners (``text``, as
+    ``--corners`` takes them) in the framing."""
     if settings.framing.bbox != "corners":
         return settings
-    text = (job.values or {}).get("corners")
     if text in (None, ""):
         raise JobError("--bbox corners needs the rectangle's corners (--corners, or a "
                        "corners column) for this image")
@@ -238,7 +259,7 @@ def process_job(job: Job, settings: Settings, scratch: Scratch | None = None) ->
         with np.errstate(all="ignore"), warnings.catch_warnings(), fetched(job.source):
             warnings.simplefilter("ignore")
             orientation = _orientation(job, settings)
-            view, source, pose = _view(job, orientation=orientation)
+            view, source, pose, corners = _view(job, orientation=orientation)
             row.update(params_row(view, str(job.source)), focal_source=source, **pose,
                        orientation=_orientation_cell(orientation))
             if checking and not is_regular_file(job.output):
@@ -251,7 +272,7 @@ def process_job(job: Job, settings: Settings, scratch: Scratch | None = None) ->
                 raise JobError("no such file" if not job.source.exists() else "not a file")
             width, height = displayed_size(
                 orientation or 1, *measure_image_file(job.source, settings.max_input_pixels))
-            info = _plan(view, width, height, _framed(job, settings))  # big outputs refused
+            info = _plan(view, width, height, _framed(settings, corners))  # big outputs refused
             image = scratch.read(job.source, settings.max_input_pixels, orientation or 1)
             dtype, channels = image.dtype, 1 if image.ndim == 2 else image.shape[2]
             del image  # the scratch holds it for the warp
@@ -290,12 +311,12 @@ def record_row(job: Job, settings: Settings, status: str = "ok") -> dict[str, An
     try:
         with np.errstate(all="ignore"):
             orientation = _orientation(job, settings)
-            view, source, pose = _view(job, orientation=orientation)
+            view, source, pose, corners = _view(job, orientation=orientation)
             row.update(params_row(view, str(job.source)), focal_source=source, **pose,
                        orientation=_orientation_cell(orientation))
             size = displayed_size(orientation or 1,
                                   *measure_image_file(job.source, settings.max_input_pixels))
-            info = _plan(view, size[0], size[1], _framed(job, settings))
+            info = _plan(view, size[0], size[1], _framed(settings, corners))
         row.update(_geometry(info), image=str(job.source), status=status,
                    made_with=_made_with(job, settings))
         existing = image_file_size(job.output)
@@ -315,7 +336,7 @@ def died_row(job: Job, reason: str, settings: Settings) -> dict[str, Any]:
     row: dict[str, Any] = {"image": str(job.source), "output": str(job.output)}
     with contextlib.suppress(Exception), np.errstate(all="ignore"):
         orientation = _orientation(job, settings)
-        view, source, pose = _view(job, estimate=False, orientation=orientation)
+        view, source, pose, _ = _view(job, estimate=False, orientation=orientation)
         row.update(params_row(view, str(job.source)), focal_source=source, **pose,
                    orientation=_orientation_cell(orientation))
     row.update(status="error", error=reason)

@@ -105,10 +105,11 @@ def _camera_words(path: str) -> list[tuple[str, str]]:
 
 
 def made_with(values: Mapping[str, Any] | None, wall: str | None, settings: Settings,
-              suffix: str) -> str | None:
+              suffix: str, auto: str | None = None) -> str | None:
     """The ``made_with`` cell of an output: ``name=value`` words of the image's given
-    ``values`` (None: the image has none, no cell), the ``wall`` of an estimated pose, and
-    the ``settings`` that change an output of this ``suffix``.
+    ``values`` (None: the image has none, no cell), the ``wall`` of an estimated pose or the
+    ``auto`` mode of a pose found otherwise (``document``), and the ``settings`` that change
+    an output of this ``suffix``.
 
     Options that cannot change a written file (``--max-pixels``, ``--max-input-pixels``,
     ``--quality`` of a PNG) are left out, so that changing them never refuses a rerun.
@@ -121,6 +122,8 @@ def made_with(values: Mapping[str, Any] | None, wall: str | None, settings: Sett
         words += _camera_words(str(values["camera"]))
     if wall is not None:
         words.append(("wall", wall))
+    if auto is not None:
+        words.append(("auto", auto))
     framing = settings.framing
     box = framing.bbox
     words.append(("bbox", box if isinstance(box, str) else ",".join(map(_number, box))))

@@ -12,7 +12,7 @@ from tqdm import tqdm
 
 from ..api.estimate import DEFAULT_MIN_CONFIDENCE, WALL_CHOICES
 from ..base.messages import one_line
-from ..batch.estimate_jobs import EstimateJob, EstimateOptions, run_estimates
+from ..batch.estimate_jobs import AUTO_MODES, EstimateJob, EstimateOptions, run_estimates
 from ..batch.rectify_jobs import worker_context
 from ..inputs.calibration import CalibrationError
 from ..inputs.records import load_camera_file
@@ -27,6 +27,7 @@ from .options import (
     LocalPath,
     Number,
     PathOrUrl,
+    auto_mode_command,
     field_options,
     guide_options,
     jobs_option,
@@ -65,7 +66,7 @@ camera_options = field_options(
     "lens (the lens is removed from the segments' end points).")
 
 
-@click.command()
+@click.command(cls=auto_mode_command(AUTO_MODES))
 @click.argument("inputs", nargs=-1, required=True, metavar="INPUT...")
 @click.option("-o", "--output", "output", default=None,
               help="Write the table to this file (.csv, .tsv, .json, .jsonl, .md, .yaml) "
@@ -79,6 +80,11 @@ camera_options = field_options(
                    "guides (- for standard input); any pose in it is ignored.")
 @camera_options
 @guide_options
+@click.option("--auto", type=click.Choice(AUTO_MODES), default="lines", show_default=True,
+              help="How images without guides are estimated: from their lines, or "
+                   "('--auto document') from the corners of the largest clear "
+                   "quadrilateral of strong edges (a page, a sign, a screen), which the "
+                   "'corners' column gives; refused when there is none.")
 @click.option("--min-confidence", type=Number(0, 1), default=DEFAULT_MIN_CONFIDENCE,
               show_default=True,
               help="Estimates less confident than this are errors; the confidence is the "
@@ -95,7 +101,8 @@ camera_options = field_options(
 @jobs_option
 @quiet_option("No summary on stderr.")
 def estimate(inputs: tuple[str, ...], output: str | None, fmt: str | None, recursive: bool,
-             sidecar: Path | None, min_confidence: float, wall: str, draw: Path | None,
+             sidecar: Path | None, auto: str, min_confidence: float, wall: str,
+             draw: Path | None,
              max_input_pixels: str, exif_orientation: str, jobs: int | None, quiet: bool,
              **camera: Any) -> None:
     """Estimate pan, tilt and roll of each image from its straight lines (thesis future work 1).
@@ -162,7 +169,7 @@ def estimate(inputs: tuple[str, ...], output: str | None, fmt: str | None, recur
                 error = f"--draw: {problem}"
         job_list.append(EstimateJob(source.path, PurePosixPath(source.relative).as_posix(),
                                     values, where, picture, error))
-    options = EstimateOptions(min_confidence, wall, input_pixel_limit, exif_orientation)
+    options = EstimateOptions(min_confidence, wall, input_pixel_limit, exif_orientation, auto)
     for problem in unreadable:
         report_error(problem)
     counts = {"ok": 0, "failed": len(unreadable), "interrupted": 0}

@@ -428,3 +428,31 @@ def view_defaults(kwargs: dict[str, Any]) -> dict[str, Any]:
     """The view options the user gave, as fallback values for sidecar records."""
     return {name: kwargs[name] for name in (*VIEW_FIELDS, "camera", *GUIDE_OPTIONS, "fit")
             if kwargs.get(name) is not None}
+
+
+class AutoModeCommand(click.Command):
+    """A command whose ``--auto`` names its mode or stands alone: ``--auto document`` and
+    ``--auto=document`` pick a mode, a bare ``--auto`` is the first mode (``lines``). The
+    word after ``--auto`` is its mode only when it names one, so ``rectify --auto DIR``
+    still reads ``DIR`` as an input (a file named like a mode: ``./document``)."""
+
+    auto_modes: tuple[str, ...] = ()
+
+    def parse_args(self, ctx: click.Context, args: list[str]) -> list[str]:
+        words: list[str] = []
+        rest = list(args)
+        while rest:
+            word = rest.pop(0)
+            if word == "--":
+                words += [word, *rest]
+                break
+            if word == "--auto":
+                mode = rest.pop(0) if rest and rest[0] in self.auto_modes else self.auto_modes[0]
+                word = f"--auto={mode}"
+            words.append(word)
+        return super().parse_args(ctx, words)
+
+
+def auto_mode_command(modes: tuple[str, ...]) -> type[AutoModeCommand]:
+    """A :class:`AutoModeCommand` class whose ``--auto`` takes ``modes`` (the first alone)."""
+    return type("AutoCommand", (AutoModeCommand,), {"auto_modes": tuple(modes)})

@@ -32,7 +32,7 @@ from tqdm import tqdm
 from ..api.estimate import DEFAULT_MIN_CONFIDENCE, WALL_CHOICES
 from ..base.messages import one_line, quote
 from ..base.numerals import parse_decimal, parse_whole
-from ..batch.estimate_jobs import EstimateOptions
+from ..batch.estimate_jobs import AUTO_MODES, EstimateOptions
 from ..batch.rectify_jobs import (
     RECTIFY_COLUMNS,
     Counts,
@@ -80,6 +80,7 @@ from .options import (
     Integer,
     Number,
     PathOrUrl,
+    auto_mode_command,
     guide_options,
     interpolation_option,
     jobs_option,
@@ -449,7 +450,7 @@ def dask_executor(address: str, processes: int, retries: int,
         raise InputError(f"--scheduler {address}: {error}") from None
 
 
-@click.command()
+@click.command(cls=auto_mode_command(AUTO_MODES))
 @click.argument("inputs", nargs=-1, required=True, metavar="INPUT...")
 @click.option("-o", "--output", "outdir", required=True, type=PathOrUrl(),
               help="Output directory (created if needed), or a URL prefix (s3://bucket/out/).")
@@ -515,9 +516,13 @@ def dask_executor(address: str, processes: int, retries: int,
                    "table is OUTDIR/gsrwt.K-of-N.csv; join the tables with 'gsrwt tables "
                    "merge'.")
 @quiet_option("No progress bar and no summary.")
-@click.option("--auto", is_flag=True,
-              help="Estimate the pose of images that no source gives pan and tilt for, from "
-                   "their own lines (as 'gsrwt estimate'; the focal length too if unknown).")
+@click.option("--auto", type=click.Choice(AUTO_MODES), default=None,
+              help="Estimate the pose of images that no source gives pan and tilt for: "
+                   "'--auto' or '--auto lines' from their own lines (as 'gsrwt estimate'; "
+                   "the focal length too if unknown); '--auto document' from the corners of "
+                   "the largest clear quadrilateral of strong edges (a page, a sign, a "
+                   "screen), refused when there is none (with --bbox corners: the document "
+                   "alone).")
 @click.option("--min-confidence", type=Number(0, 1), default=DEFAULT_MIN_CONFIDENCE,
               show_default=True,
               help="With --auto: estimates less confident than this are errors (as "
@@ -546,9 +551,10 @@ def rectify(inputs: tuple[str, ...], outdir: Path | Location, recursive: bool,
     run = RunOptions.pop_from(options)
     settings, extension = settings_from_options(outdir, options)
     table = table_from_options(outdir, options.pop("table_path"), options.pop("shard"))
+    auto = options.pop("auto")
     estimating = (EstimateOptions(options.pop("min_confidence"), options.pop("wall"),
-                                  settings.max_input_pixels, settings.orientation)
-                  if options.pop("auto") else None)
+                                  settings.max_input_pixels, settings.orientation, auto)
+                  if auto is not None else None)
     batch = plan_batch(inputs, outdir, recursive, sidecar, table, settings, extension,
                        estimating, view_kwargs=options)
     counts, stopped = run_planned(batch, settings, table, run)

@@ -149,7 +149,7 @@ def view_from_values(values: Mapping[str, Any], where: str, orientation: int = 1
     ``verticals``, ``horizontals``) get the pose they show (:func:`guided_view_values`).
     Raises only :class:`RecordError`.
     """
-    if has_guides(values):
+    if guides_give_pose(values):
         values = guided_view_values(values, where, orientation)[0]
     numbers_given = {
         name: _number(where, name, values[name])
@@ -206,6 +206,19 @@ def view_from_values(values: Mapping[str, Any], where: str, orientation: int = 1
                 f"gamma = {implied:.2f}",
             )
     return view
+
+
+def guides_give_pose(values: Mapping[str, Any]) -> bool:
+    """Whether ``values`` have their pose from guides: they have guides, and not only corners
+    beside a pose (the rows ``gsrwt estimate --auto document`` writes: the pose found from the
+    corners, which then only frame the output, ``--bbox corners``)."""
+    if not has_guides(values):
+        return False
+    segments = any(values.get(kind) not in (None, "") for kind in ("verticals", "horizontals"))
+    posed = any(values.get(name) not in (None, "")
+                for name in ("pan", "tilt", "roll", *GSRWT_FIELDS, *RVEC_FIELDS,
+                             *QUATERNION_FIELDS))
+    return segments or not posed
 
 
 def guided_view_values(values: Mapping[str, Any], where: str, orientation: int = 1

@@ -16,7 +16,8 @@ PARAMS_COLUMNS = (
 #: ``gsrwt rectify``: the view's parameters, where they came from, the output and its
 #: geometry, what made it, and how it went.
 RECTIFY_COLUMNS = (
-    *PARAMS_COLUMNS, "focal_source", "pose_source", "confidence", "orientation", "output",
+    *PARAMS_COLUMNS, "focal_source", "pose_source", "confidence", "aspect", "aspect_source",
+    "orientation", "output",
     "out_width", "out_height", "scale", "homography", "made_with", "status", "error",
 )
 
@@ -37,7 +38,7 @@ VANISHING_DIRECTIONS = ("vertical", "wall", "normal")
 #: ``aspect_source``: the rectangle of ``--corners``, ``given`` or ``estimated``).
 ESTIMATE_COLUMNS = (
     "image", "pan", "tilt", "roll", "focal", "fx", "fy", "cx", "cy", "width", "height",
-    "confidence", "segments", "inliers", "focal_source", "aspect", "aspect_source",
+    "confidence", "segments", "inliers", "focal_source", "aspect", "aspect_source", "corners",
     *(f"vp_{name}_{axis}" for name in VANISHING_DIRECTIONS for axis in ("col", "row")),
     "status", "error",
 )

@@ -16,6 +16,7 @@ from typing import IO, Any
 
 from ..base.messages import QUOTE_LIMIT, escape_controls, quote, shorten
 from ..base.numerals import parse_decimal, parse_whole
+from ..inputs.guides import ASPECT_SOURCES
 from .columns import (
     FOCAL_SOURCES,
     ORIENTATION_VALUES,
@@ -232,11 +233,12 @@ class TableSchema:
 #: The table ``gsrwt rectify`` writes, each of its columns with what its cells hold.
 RECTIFY_TABLE = TableSchema(
     "gsrwt rectify", RECTIFY_COLUMNS,
-    {**{name: NUMBER for name in (*PARAMS_COLUMNS, "confidence", "scale")},
+    {**{name: NUMBER for name in (*PARAMS_COLUMNS, "confidence", "aspect", "scale")},
      "image": NAME, "horizon_in_image": FLAG, "out_width": POSITIVE_WHOLE,
      "out_height": POSITIVE_WHOLE, "homography": MATRIX,
      "focal_source": choice(*FOCAL_SOURCES, optional=True),
      "pose_source": choice(*POSE_SOURCES, optional=True),
+     "aspect_source": choice(*ASPECT_SOURCES, optional=True),
      "orientation": choice(*ORIENTATION_VALUES, optional=True),
      "status": choice(*RECTIFY_STATUSES)},
 )

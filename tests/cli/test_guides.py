@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import csv
 import io
+from pathlib import Path
 
 import cv2
 import numpy as np
@@ -294,3 +295,100 @@ def test_fit_vertical_applies_to_auto(tmp_path):
     for name in ("tilt_deg", "roll_deg"):
         assert float(found["vertical"][name]) == pytest.approx(float(found["both"][name]),
                                                                 abs=1e-6)
+
+
+# --------------------------------------------------------------------------------------------
+# --auto document: the corners found, not given
+# --------------------------------------------------------------------------------------------
+
+PAGE = rectangle_shot(-24.0, 14.0, -6.0, 1000.0, 210 / 297, size=0.7)
+
+
+@pytest.fixture(scope="module")
+def page_photo(tmp_path_factory) -> Path:
+    """An A4 page rendered onto a real photo (``tests/helpers/pages.py``), in its own folder."""
+    from tests.helpers.pages import render_page
+
+    folder = tmp_path_factory.mktemp("document")
+    cv2.imwrite(str(folder / "page.png"), render_page(PAGE, "home.jpg"))
+    return folder / "page.png"
+
+
+def test_estimate_auto_document_finds_the_page_its_pose_and_aspect(page_photo):
+    done = run_gsrwt("estimate", page_photo, "--auto", "document", "--focal", "1000",
+                     "-f", "csv")
+    assert done.returncode == 0, done.stderr
+    [row] = rows(done.stdout)
+    assert np.max(np.abs(pose_of(row) - [-24.0, 14.0, -6.0])) < 0.3
+    assert abs(float(row["aspect"]) / (210 / 297) - 1) < 0.01
+    found = np.array([[float(v) for v in point.split(",")] for point in row["corners"].split()])
+    assert np.abs(found - PAGE.corners).max() < 1.0
+    assert (row["aspect_source"], row["focal_source"], row["status"]) == (
+        "estimated", "option", "ok")
+
+
+def test_rectify_auto_document_frames_the_page_upright_and_resumes(page_photo, tmp_path):
+    """``rectify --auto document --bbox corners``: the page's true corners land on an upright
+    rectangle (within a pixel: the corners are found, not given); the table says how; a
+    rerun skips it; ``--auto`` alone reads its next word as an input, not a mode."""
+    out = tmp_path / "out"
+    args = ("rectify", page_photo, "--auto", "document", "--focal", "1000", "--bbox",
+            "corners", "-o", out, "-j", "1")
+    done = run_gsrwt(*args)
+    assert done.returncode == 0, done.stderr
+    [row] = rows((out / "gsrwt.csv").read_text())
+    assert (row["pose_source"], row["aspect_source"], row["status"]) == (
+        "estimated", "estimated", "ok")
+    assert "auto=document" in row["made_with"].split()
+    tl, tr, br, bl = rectified_corners(row, PAGE.corners)
+    assert abs(tl[1] - tr[1]) < 1 and abs(bl[1] - br[1]) < 1
+    assert abs(tl[0] - bl[0]) < 1 and abs(tr[0] - br[0]) < 1
+    assert abs((tr[0] - tl[0]) / (bl[1] - tl[1]) / (210 / 297) - 1) < 0.01
+    again = run_gsrwt(*args)
+    assert again.returncode == 0 and "0 ok, 1 skipped" in again.stderr
+    # The word after a bare --auto is an input unless it names a mode.
+    lines = run_gsrwt("rectify", "--auto", page_photo.parent, "--focal", "1000", "-o",
+                      tmp_path / "lines", "-j", "1")
+    assert "Usage" not in lines.stderr
+    [row] = rows((tmp_path / "lines" / "gsrwt.csv").read_text())
+    assert row["image"].endswith("page.png") and row["pose_source"] == "estimated"
+
+
+def test_auto_takes_only_its_modes():
+    done = run_gsrwt("rectify", "--auto=walls", str(SAMPLE_VIEWS), "-o", "unused")
+    assert done.returncode == 2
+    assert "'--auto'" in done.stderr and "'walls' is not one of 'lines', 'document'" in (
+        done.stderr)
+
+
+def test_auto_document_refuses_a_photo_without_one_saying_why(tmp_path):
+    photo = DATA / "real" / "gravel.jpg"
+    done = run_gsrwt("estimate", photo, "--auto", "document", "--focal", "500", "-f", "csv")
+    assert done.returncode == 1
+    [row] = rows(done.stdout)
+    assert row["status"] == "error"
+    assert row["error"].startswith("no convex quadrilateral of straight edges")
+
+
+def test_estimate_auto_document_pipes_into_rectify_with_its_corners(page_photo, tmp_path):
+    estimated = run_gsrwt("estimate", page_photo, "--auto", "document", "--focal", "1000",
+                          "-q")
+    assert estimated.returncode == 0, estimated.stderr
+    done = run_gsrwt("rectify", page_photo, "--sidecar", "-", "--bbox", "corners", "-o",
+                     tmp_path / "out", "-j", "1", "-q", stdin=estimated.stdout)
+    assert done.returncode == 0, done.stderr
+    [row] = rows((tmp_path / "out" / "gsrwt.csv").read_text())
+    assert row["pose_source"] == "sidecar"
+    tl, tr, br, bl = rectified_corners(row, PAGE.corners)
+    assert abs(tl[1] - tr[1]) < 1 and abs(tl[0] - bl[0]) < 1
+
+
+def test_rectify_table_says_the_aspect_ratio_and_its_source(photo, tmp_path):
+    for extra, source in (([], "estimated"), (["--aspect", "3:2"], "given")):
+        out = tmp_path / source
+        done = run_gsrwt("rectify", photo, "--corners", corners_text(SHOT), *extra, "-o", out,
+                         "-q", "-j", "1")
+        assert done.returncode == 0, done.stderr
+        [row] = rows((out / "gsrwt.csv").read_text())
+        assert row["aspect_source"] == source
+        assert abs(float(row["aspect"]) / 1.5 - 1) < 1e-3

@@ -98,8 +98,9 @@ def test_version():
 @pytest.mark.slow
 def test_every_readme_command_runs(tmp_path):
     """Run them all (the README's, then the docs pages'), in order, in a copy of the sample
-    data, as a user would from the root."""
+    data and the real photos, as a user would from the root."""
     shutil.copytree(ROOT / "sample_data", tmp_path / "sample_data")
+    shutil.copytree(ROOT / "tests" / "data" / "real", tmp_path / "tests" / "data" / "real")
     environment = {**os.environ, "PATH": f"{Path(sys.executable).parent}{os.pathsep}"
                    f"{os.environ.get('PATH', '')}"}
     commands = readme_commands()
