@@ -4,7 +4,8 @@ Drawn into an 8-bit BGR copy of the image: the segments coloured by their direct
 (vertical red, the wall's horizontal green, the wall's normal blue, none grey), the horizon
 (the vanishing line of horizontal planes, yellow) and the outline of what the canonical
 frontal view of the wall shows (``rectify --bbox frontal``, magenta), with the pose written
-at the top left; or the reason there is no pose.
+at the top left; or the reason there is no pose. With ``--auto document``: the document's
+outline (magenta, its top-left corner marked) or the reason there is none.
 """
 
 from __future__ import annotations
@@ -94,3 +95,20 @@ def _draw_outline(picture: np.ndarray, estimate: PoseEstimate, camera: Intrinsic
     if finite.sum() >= 2:
         polygon = np.round(points[finite] * 16).astype(np.int32)
         cv2.polylines(picture, [polygon], True, OUTLINE, thickness, cv2.LINE_AA, shift=4)
+
+
+def draw_document(image: np.ndarray, corners: np.ndarray | None, text: str) -> np.ndarray:
+    """The picture (BGR, the image's size) of ``--auto document``: the document's ``corners``
+    ((4, 2), top-left first; None: none found), its top-left corner marked, and ``text``."""
+    picture = (colour8(np.asarray(image)) * 0.55).astype(np.uint8)
+    height, width = picture.shape[:2]
+    thickness = max(1, round(math.hypot(width, height) / 600))
+    if corners is not None:
+        cv2.polylines(picture, [np.round(corners * 4).astype(np.int32)], True, OUTLINE,
+                      thickness, cv2.LINE_AA, 2)
+        x, y = np.round(corners[0]).astype(int)
+        cv2.circle(picture, (int(x), int(y)), 4 * thickness, OUTLINE, thickness, cv2.LINE_AA)
+    scale = max(0.4, width / 1400)
+    cv2.putText(picture, text, (8, int(24 * scale + 8)), cv2.FONT_HERSHEY_SIMPLEX, scale,
+                (255, 255, 255), max(1, thickness), cv2.LINE_AA)
+    return picture

@@ -200,15 +200,16 @@ def guided_row(path: Path, values: Mapping[str, Any], where: str, orientation: i
     return row
 
 
-def document_values(path: Path, values: Mapping[str, Any], options: EstimateOptions
-                    ) -> dict[str, Any]:
+def document_values(path: Path, values: Mapping[str, Any], options: EstimateOptions,
+                    image: np.ndarray | None = None) -> dict[str, Any]:
     """``values`` (their pose left out) with the ``corners`` of the document the image shows
     (``--auto document``: :func:`~gsrwt_cli.vision.document.find_document`), in the photo as
-    displayed. Raises :class:`~gsrwt_cli.api.estimate.EstimateError`, saying why, when there
-    is no clear one."""
+    displayed (``image``: the photo, when it is already read). Raises
+    :class:`~gsrwt_cli.api.estimate.EstimateError`, saying why, when there is no clear one."""
     from ..vision.document import DocumentError, find_document  # only when asked for
 
-    image = read_image(path, options.max_input_pixels, orientation_of(path, options))
+    if image is None:
+        image = read_image(path, options.max_input_pixels, orientation_of(path, options))
     try:
         found = find_document(image)
     except DocumentError as error:
@@ -271,7 +272,7 @@ def process_estimate(job: EstimateJob, options: EstimateOptions,
             if has_guides(job.values) or options.mode == "document":
                 values = job.values
                 if not has_guides(values):
-                    values = document_values(job.source, values, options)
+                    values = _found_document(job, options, picture_root)
                     row["corners"] = values["corners"]
                 row.update(guided_row(job.source, values, job.where,
                                       orientation_of(job.source, options)), status="ok")
@@ -297,6 +298,28 @@ def process_estimate(job: EstimateJob, options: EstimateOptions,
     except Exception as error:  # every failure of one image is that image's row
         row.update(status="error", error=error_text(error, describe))
     return row
+
+
+def _found_document(job: EstimateJob, options: EstimateOptions,
+                    picture_root: Path | None) -> dict[str, Any]:
+    """The job's values with the corners of its document (:func:`document_values`), and its
+    picture (``--draw``: the document's outline, or why there is none) written."""
+    if job.picture is None:
+        return document_values(job.source, job.values, options)
+    from ..api.estimate_drawing import draw_document  # only when pictures are asked for
+
+    image = read_image(job.source, options.max_input_pixels, orientation_of(job.source, options))
+    try:
+        values = document_values(job.source, job.values, options, image)
+    except EstimateError as error:
+        write_atomic(job.picture, encode_image(draw_document(image, None, str(error)), ".png"),
+                     root=picture_root)
+        raise
+    corners = np.array([[float(v) for v in point.split(",")]
+                        for point in values["corners"].split()])
+    write_atomic(job.picture, encode_image(draw_document(image, corners, "document"), ".png"),
+                 root=picture_root)
+    return values
 
 
 class EstimateWorker(ProcessWorker):

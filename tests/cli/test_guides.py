@@ -392,3 +392,23 @@ def test_rectify_table_says_the_aspect_ratio_and_its_source(photo, tmp_path):
         [row] = rows((out / "gsrwt.csv").read_text())
         assert row["aspect_source"] == source
         assert abs(float(row["aspect"]) / 1.5 - 1) < 1e-3
+
+
+def test_estimate_auto_document_draws_the_outline_or_why_not(page_photo, tmp_path):
+    done = run_gsrwt("estimate", page_photo, DATA / "real" / "gravel.jpg", "--auto",
+                     "document", "--focal", "1000", "--draw", tmp_path / "drawn", "-q")
+    assert done.returncode == 1  # gravel has no document
+    picture = cv2.imread(str(tmp_path / "drawn" / "page.png"))
+    magenta = (picture[..., 0] > 200) & (picture[..., 2] > 200) & (picture[..., 1] < 80)
+    rows_, cols = np.nonzero(magenta)
+    assert len(rows_) > 1000
+    # every outline pixel near a side of the page
+    sides = [(PAGE.corners[k], PAGE.corners[(k + 1) % 4]) for k in range(4)]
+    points = np.column_stack([cols, rows_]).astype(float)
+    def from_line(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        d = (b - a) / np.linalg.norm(b - a)
+        return np.abs(d[0] * (points[:, 1] - a[1]) - d[1] * (points[:, 0] - a[0]))
+
+    distance = np.min([from_line(a, b) for a, b in sides], axis=0)
+    assert np.percentile(distance, 99) < 12  # the line and the top-left corner's ring
+    assert (tmp_path / "drawn" / "gravel.png").is_file()
