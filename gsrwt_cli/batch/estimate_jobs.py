@@ -26,6 +26,7 @@ from ..api.estimate import (
     estimate_pose,
 )
 from ..geometry.camera import Intrinsics
+from ..geometry.guides import GuideError
 from ..geometry.orientation import displayed_size
 from ..imaging.images import (
     DEFAULT_MAX_INPUT_PIXELS,
@@ -35,7 +36,7 @@ from ..imaging.images import (
     read_image,
 )
 from ..inputs.focal import with_focal
-from ..inputs.guides import fit_pose, has_guides
+from ..inputs.guides import fit_pose, guided_pose, has_guides
 from ..inputs.records import (
     GSRWT_FIELDS,
     POSE_FIELDS,
@@ -52,6 +53,12 @@ from .workers import ProcessWorker
 
 #: How ``--auto`` finds a pose: from the image's lines, or from a document's corners.
 AUTO_MODES = ("lines", "document")
+#: With the focal length known, four corners over-determine a rectangle's pose by one
+#: number: the root mean square (pixels) by which the best rectangle's corners may miss the
+#: found ones. What 0.5 px of error on each corner coordinate explains at 99 % (chi-square, one
+#: degree of freedom: rms <= 0.5 * sqrt(6.63 / 8) = 0.46); found corners are within 0.15 px
+#: (median) on rendered pages.
+MAX_DOCUMENT_RMS_PX = 0.46
 
 #: Fields of a record that give a pose: an estimate ignores them (it makes its own).
 _POSE_VALUES = ("pan", "tilt", "roll", *GSRWT_FIELDS, *POSE_FIELDS)
@@ -200,22 +207,42 @@ def guided_row(path: Path, values: Mapping[str, Any], where: str, orientation: i
     return row
 
 
-def document_values(path: Path, values: Mapping[str, Any], options: EstimateOptions,
-                    image: np.ndarray | None = None) -> dict[str, Any]:
+def document_values(path: Path, values: Mapping[str, Any], where: str,
+                    options: EstimateOptions, image: np.ndarray | None = None
+                    ) -> dict[str, Any]:
     """``values`` (their pose left out) with the ``corners`` of the document the image shows
     (``--auto document``: :func:`~gsrwt_cli.vision.document.find_document`), in the photo as
     displayed (``image``: the photo, when it is already read). Raises
-    :class:`~gsrwt_cli.api.estimate.EstimateError`, saying why, when there is no clear one."""
+    :class:`~gsrwt_cli.api.estimate.EstimateError`, saying why, when there is no clear one,
+    or when, with the focal length known, the quadrilateral is no rectangle's image: the
+    corners of the best-fitting rectangle seen by that camera miss them by more than
+    :data:`MAX_DOCUMENT_RMS_PX` (root mean square)."""
     from ..vision.document import DocumentError, find_document  # only when asked for
 
+    orientation = orientation_of(path, options)
     if image is None:
-        image = read_image(path, options.max_input_pixels, orientation_of(path, options))
+        image = read_image(path, options.max_input_pixels, orientation)
     try:
         found = find_document(image)
     except DocumentError as error:
         raise EstimateError(str(error)) from None
     own = {name: value for name, value in values.items() if name not in _POSE_VALUES}
     own["corners"] = found.corners_text()
+    sized = dict(own)
+    if sized.get("width") in (None, "") and sized.get("cx") in (None, ""):
+        sized["height"], sized["width"] = image.shape[:2]
+    camera = camera_for(path, sized, where, orientation)[0]
+    if camera is not None:
+        try:
+            fit = guided_pose({"corners": own["corners"], "aspect": own.get("aspect")},
+                              camera, None)
+        except GuideError as error:
+            raise EstimateError(f"the document's corners give no pose: {error}") from None
+        if fit.rms_px > MAX_DOCUMENT_RMS_PX:
+            raise EstimateError(
+                f"the largest quadrilateral is no rectangle seen by this camera: the best "
+                f"rectangle's corners miss it by {fit.rms_px:.1f} px (rms; "
+                f"{MAX_DOCUMENT_RMS_PX:g} allowed); give --corners")
     return own
 
 
@@ -305,12 +332,12 @@ def _found_document(job: EstimateJob, options: EstimateOptions,
     """The job's values with the corners of its document (:func:`document_values`), and its
     picture (``--draw``: the document's outline, or why there is none) written."""
     if job.picture is None:
-        return document_values(job.source, job.values, options)
+        return document_values(job.source, job.values, job.where, options)
     from ..api.estimate_drawing import draw_document  # only when pictures are asked for
 
     image = read_image(job.source, options.max_input_pixels, orientation_of(job.source, options))
     try:
-        values = document_values(job.source, job.values, options, image)
+        values = document_values(job.source, job.values, job.where, options, image)
     except EstimateError as error:
         write_atomic(job.picture, encode_image(draw_document(image, None, str(error)), ".png"),
                      root=picture_root)

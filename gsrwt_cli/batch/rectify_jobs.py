@@ -170,7 +170,7 @@ def _view(job: Job, estimate: bool = True, orientation: int | None = None
         )
 
         if job.estimate.mode == "document":
-            values = document_values(job.source, values, job.estimate)
+            values = document_values(job.source, values, job.where, job.estimate)
         else:
             values, found, confidence = estimated_view_values(job.source, values, job.where,
                                                               job.estimate)
