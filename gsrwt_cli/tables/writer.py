@@ -14,7 +14,11 @@ import re
 from collections.abc import Iterable, Mapping, Sequence
 from typing import IO, Any
 
+from ..base.messages import escape_controls
+
 FORMATS = ("table", "csv", "tsv", "json", "jsonl", "markdown")
+#: What ``str.splitlines`` breaks a line at: escaped in the aligned formats' cells.
+_LINE_BREAK = re.compile("[\n\r\v\f\x1c\x1d\x1e\x85\u2028\u2029]")
 #: Decimal places of floats in the machine formats and in the human ones.
 MACHINE_DECIMALS = 6
 HUMAN_DECIMALS = 3
@@ -120,8 +124,10 @@ class TableWriter:
                 self.stream.write(text + "\n")
             else:
                 self.stream.write(("[\n  " if self._rows_written == 0 else ",\n  ") + text)
-        else:
-            self._buffer.append([_text_value(v, HUMAN_DECIMALS) for v in values])
+        else:  # one line per row: what would break a line (a newline in a name) escaped
+            self._buffer.append([_LINE_BREAK.sub(lambda m: escape_controls(m.group(0)),
+                                                 _text_value(v, HUMAN_DECIMALS))
+                                 for v in values])
         self._rows_written += 1
         if self.flush_rows:
             self.stream.flush()

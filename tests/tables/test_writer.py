@@ -54,16 +54,17 @@ def test_text_formats_read_back_cell_for_cell(fmt):
     """Names come back as given (quoted in csv and tsv, ``|`` escaped in markdown), numbers
     to the format's decimals without trailing zeros, ``-0`` as 0, missing and non-finite
     values as empty cells, flags as true and false."""
-    # A line break in a name would split the row of the laid-out formats: csv and tsv only.
-    kept = [index for index, row in enumerate(ROWS)
-            if "\n" not in row["image"] or fmt in ("csv", "tsv")]
+    # A line break in a name would split the row of the laid-out formats: it is escaped.
+    kept = list(range(len(ROWS)))
     rows = [ROWS[index] for index in kept]
     back = tables.read_table(written(fmt, rows), fmt)
     decimals = 3 if fmt in ("markdown", "table") else 6
     assert [list(row) for row in back] == [list(COLUMNS)] * len(rows)
     for got, index in zip(back, kept):
         row = ROWS[index]
-        assert got["image"] == row["image"]
+        laid_out = fmt in ("markdown", "table")
+        assert got["image"] == (row["image"].replace("\n", "\\n") if laid_out
+                                else row["image"])
         assert (got["pan_deg"], got["a_px"]) == (PAN[decimals][index], A_PX[decimals][index])
         assert got["out_width"] == ("" if row["out_width"] is None else str(row["out_width"]))
         flag = row["horizon_in_image"]
@@ -150,3 +151,16 @@ def test_file_names_give_their_format():
     assert [format_from_extension(name) for name in
             ("t.csv", "T.TSV", "t.json", "t.jsonl", "t.md", "t.txt", "csv")] == [
         "csv", "tsv", "json", "jsonl", "markdown", None, None]
+
+
+@pytest.mark.parametrize("fmt", ["table", "markdown"])
+def test_the_aligned_formats_keep_one_line_per_row_whatever_a_name_holds(fmt):
+    """A file name with a newline or a tab (legal on POSIX) is written with escapes in the
+    human formats, so that every row stays one line of the layout."""
+    stream = io.StringIO()
+    writer = TableWriter(stream, ["image", "pan"], fmt)
+    writer.write_row({"image": "a\nb\u2028c.jpg", "pan": 1.5})
+    writer.close()
+    lines = stream.getvalue().splitlines()
+    assert len(lines) == (2 if fmt == "table" else 3)
+    assert "a\\nb\\x2028c.jpg" in lines[-1]
