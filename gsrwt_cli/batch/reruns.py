@@ -129,6 +129,9 @@ def made_with(values: Mapping[str, Any] | None, wall: str | None, settings: Sett
     words.append(("bbox", box if isinstance(box, str) else ",".join(map(_number, box))))
     if box in ("full", "crop"):
         words.append(("max_stretch", _number(framing.max_stretch)))
+    if box == "crop" and framing.crop_aspect is not None:
+        aspect = framing.crop_aspect
+        words.append(("crop_aspect", aspect if isinstance(aspect, str) else _number(aspect)))
     if box == "corners":
         words.append(("margin", _number(framing.margin)))
     words.append(("scale", _number(framing.scale) if framing.px_per_unit is None

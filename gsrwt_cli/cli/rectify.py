@@ -63,6 +63,7 @@ from ..imaging.images import (
     check_writable,
 )
 from ..inputs.calibration import CalibrationError
+from ..inputs.guides import parse_aspect
 from ..inputs.records import load_camera_file
 from ..inputs.sources import (
     Source,
@@ -94,6 +95,21 @@ from .options import (
     view_defaults,
     view_options,
 )
+
+
+def parse_crop_aspect(text: str | None, bbox: object) -> float | str | None:
+    """``--crop-aspect``: ``original``, ``W:H`` or one positive number (width over height);
+    only with ``--bbox crop``."""
+    if text is None:
+        return None
+    if bbox != "crop":
+        raise click.UsageError("--crop-aspect goes with --bbox crop")
+    if text.strip().lower() == "original":
+        return "original"
+    try:
+        return parse_aspect(text)
+    except ValueError as error:
+        raise click.BadParameter(str(error), param_hint="'--crop-aspect'") from None
 
 
 def parse_bbox(text: str) -> str | tuple[float, float, float, float]:
@@ -469,6 +485,9 @@ def dask_executor(address: str, processes: int, retries: int,
 @click.option("--margin", type=Number(min=0), default=0.0, show_default=True,
               help="With --bbox corners: room around the rectangle, in percent of its width "
                    "and height.")
+@click.option("--crop-aspect", default=None, metavar="original|W:H",
+              help="With --bbox crop: the largest rectangle of this shape instead of any: "
+                   "original (the input's width over height), W:H or one number.")
 @click.option("--max-stretch", type=Number(), default=4.0, show_default=True,
               help="With --bbox full or crop: stop where the image is magnified more than "
                    "this many times the magnification at its centre.")
@@ -592,6 +611,7 @@ def settings_from_options(outdir: Path | Location, options: dict[str, Any]
     extension (``--ext``), from the options, which it takes out of ``options``; a bad value
     is a usage error naming its option."""
     bbox = parse_bbox(options.pop("bbox"))
+    crop_aspect = parse_crop_aspect(options.pop("crop_aspect"), bbox)
     scale, px_per_unit = options.pop("scale"), options.pop("px_per_unit")
     max_stretch = options.pop("max_stretch")
     positive("--max-stretch", max_stretch)
@@ -615,7 +635,8 @@ def settings_from_options(outdir: Path | Location, options: dict[str, Any]
         framing=Framing(bbox=bbox, scale=scale or 1.0, px_per_unit=px_per_unit,
                         max_stretch=max_stretch,
                         max_pixels=parse_pixel_count(options.pop("max_pixels"), "--max-pixels"),
-                        max_size=size_limit, margin=options.pop("margin")),
+                        max_size=size_limit, margin=options.pop("margin"),
+                        crop_aspect=crop_aspect),
         interpolation=options.pop("interpolation"), fill=options.pop("fill"), alpha=alpha,
         quality=options.pop("quality"), overwrite=options.pop("overwrite"),
         dry_run=options.pop("dry_run"),

@@ -194,9 +194,12 @@ def full_frame(
 
 
 def crop_frame(
-    view: View, max_stretch: float = 4.0, scale: float = 1.0, cells: int = 160
+    view: View, max_stretch: float = 4.0, scale: float = 1.0, cells: int = 160,
+    aspect: float | None = None,
 ) -> Frame:
-    """The largest axis-aligned rectangle of the visible wall with no fill in it (auto-crop).
+    """The largest axis-aligned rectangle of the visible wall with no fill in it (auto-crop);
+    with ``aspect`` (width over height), the largest of that shape (darktable's "original
+    format" with the photo's own), centred in the run of cells it fits in.
 
     Within :func:`full_frame`'s extent, a lattice of ``cells + 1`` points a side is mapped
     back to the input: a point counts if it lands inside the image (through the lens, if
@@ -226,12 +229,46 @@ def crop_frame(
         good &= local_stretch(homography, np.nan_to_num(ideal)) <= max_stretch * reference
     corners = good.reshape(cells + 1, cells + 1)
     valid = corners[:-1, :-1] & corners[1:, :-1] & corners[:-1, 1:] & corners[1:, 1:]
+    cell_x, cell_y = (full.x1 - full.x0) / cells, (full.y1 - full.y0) / cells
+    if aspect is not None:
+        return _largest_of_aspect(valid, aspect, full, cell_x, cell_y, max_stretch, scale)
     top, bottom, left, right = _largest_rectangle(valid)
     if bottom <= top:
         raise NothingWithinStretchError(max_stretch, NothingWithinStretchError.NO_RECTANGLE)
-    cell_x, cell_y = (full.x1 - full.x0) / cells, (full.y1 - full.y0) / cells
     return Frame(full.x0 + left * cell_x, full.y0 + top * cell_y, full.x0 + right * cell_x,
                  full.y0 + bottom * cell_y, scale)
+
+
+def _largest_of_aspect(valid: np.ndarray, aspect: float, full: Frame, cell_x: float,
+                       cell_y: float, max_stretch: float, scale: float) -> Frame:
+    """The tallest rectangle of width over height ``aspect`` (in default-frame pixels) whose
+    cells are all valid: for each height in cells, the widest run of fully valid columns
+    over any ``height`` rows (as :func:`_largest_rectangle`) against the width that height
+    needs; the rectangle centred in its run, its height kept to the cells, its width exact."""
+    rows, cols = valid.shape
+    prefix = np.concatenate([np.zeros((1, cols), int), np.cumsum(valid, axis=0)])
+    index = np.arange(cols)
+    found = None
+    for height in range(1, rows + 1):
+        needed = aspect * height * cell_y / cell_x  # columns, as a fraction
+        if needed > cols:
+            break
+        tops = np.arange(rows - height + 1)
+        full_columns = (prefix[tops + height] - prefix[tops]) == height
+        last_gap = np.maximum.accumulate(np.where(full_columns, -1, index), axis=1)
+        runs = index - last_gap
+        row = int(np.argmax(runs.max(axis=1)))
+        if runs[row].max() < needed:
+            break  # a taller one would hold one this tall: none does
+        end = int(np.argmax(runs[row])) + 1
+        found = (int(tops[row]), height, end - int(runs[row].max()), end)
+    if found is None:
+        raise NothingWithinStretchError(max_stretch, NothingWithinStretchError.NO_RECTANGLE)
+    top, height, left, right = found
+    width = aspect * height * cell_y  # default-frame pixels
+    middle = full.x0 + (left + right) / 2 * cell_x
+    y0 = full.y0 + top * cell_y
+    return Frame(middle - width / 2, y0, middle + width / 2, y0 + height * cell_y, scale)
 
 
 def _largest_rectangle(valid: np.ndarray) -> tuple[int, int, int, int]:
@@ -377,6 +414,7 @@ class Framing:
     may be magnified (full, crop). ``margin`` and ``corners``: of ``"corners"``.
     ``max_pixels``: the largest output, in pixels. ``max_size``: ``(width, height)`` the
     output must fit in; a larger frame is kept but its scale lowered until it fits.
+    ``crop_aspect``: the shape of ``"crop"``'s rectangle.
     """
 
     bbox: str | tuple[float, float, float, float] = "frontal"
@@ -387,6 +425,9 @@ class Framing:
     max_size: tuple[int, int] | None = None
     margin: float = 0.0
     corners: tuple[tuple[float, float], ...] | None = None
+    #: With ``"crop"``: the rectangle's width over height (None: the largest of any shape;
+    #: ``"original"``: the input's own).
+    crop_aspect: float | str | None = None
 
     def output_scale(self, view: View) -> float:
         """Output pixels per frontal pixel. One frontal pixel covers ``Zc / f`` wall units,
@@ -436,7 +477,11 @@ def _plan_output(view: View, framing: Framing, scale: float) -> Plan:
     elif bbox == "full":
         frame = full_frame(view, max_stretch, scale)
     elif bbox == "crop":
-        frame = crop_frame(view, max_stretch, scale)
+        aspect = framing.crop_aspect
+        if aspect == "original":
+            aspect = view.width / view.height
+        frame = crop_frame(view, max_stretch, scale,
+                           aspect=None if aspect is None else float(aspect))
     elif bbox == "corners":
         if framing.corners is None:
             raise ValueError("--bbox corners needs the rectangle's corners (--corners, or a "

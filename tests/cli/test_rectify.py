@@ -506,3 +506,24 @@ def test_rows_matching_only_by_an_ambiguous_file_name_are_an_error(tmp_path):
     assert [float(r["pan_deg"]) for r in table] == [1, 3]
 
 
+
+
+def test_crop_aspect_shapes_the_crop_and_is_recorded(tmp_path):
+    """``--bbox crop --crop-aspect original`` keeps the input's shape (to a pixel) and says so
+    in ``made_with``; ``--crop-aspect`` without ``--bbox crop``, or a bad shape, is a usage
+    error naming the option."""
+    photo = Path(__file__).resolve().parents[1] / "data" / "facade" / "building.jpg"
+    done = run_gsrwt("rectify", photo, "--pan", "30", "--tilt", "8", "--focal", "1245",
+                     "--bbox", "crop", "--crop-aspect", "original", "-o", tmp_path / "out",
+                     "-q", "-j", "1")
+    assert done.returncode == 0, done.stderr
+    [row] = read_table(tmp_path / "out" / "gsrwt.csv")
+    width, height = int(row["out_width"]), int(row["out_height"])
+    assert abs(width / height - 868 / 600) < 2 / height
+    assert "crop_aspect=original" in row["made_with"].split()
+    alone = run_gsrwt("rectify", photo, "--pan", "30", "--tilt", "8", "--focal", "1245",
+                      "--crop-aspect", "4:3", "-o", tmp_path / "alone")
+    assert alone.returncode == 2 and "--crop-aspect goes with --bbox crop" in alone.stderr
+    bad = run_gsrwt("rectify", photo, "--pan", "30", "--tilt", "8", "--focal", "1245",
+                    "--bbox", "crop", "--crop-aspect", "wide", "-o", tmp_path / "bad")
+    assert bad.returncode == 2 and "'--crop-aspect'" in bad.stderr

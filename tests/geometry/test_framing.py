@@ -119,6 +119,33 @@ def test_every_pixel_of_the_crop_has_a_source_in_the_image(pose):
     assert out_width * out_height > 0.5 * width * height
 
 
+@pytest.mark.parametrize("pose", VIEWS, ids=lambda pose: f"pan{pose[0]}_tilt{pose[1]}")
+@pytest.mark.parametrize("aspect", ["original", 1.0, 2.5, 0.6])
+def test_a_crop_of_a_given_shape_has_it_and_a_source_for_every_pixel(pose, aspect):
+    """``--bbox crop --crop-aspect``: the output has the shape asked for (to its whole
+    pixels), every output pixel's centre has a source in the image (the camera built from
+    words), it is no larger than the crop of any shape, and most of the largest of its
+    shape: grown by 3 % about its centre, it reaches outside the image."""
+    pan, tilt, focal, width, height = pose
+    view = View(pan, tilt, focal, width=width, height=height)
+    plan = plan_output(view, Framing(bbox="crop", max_stretch=1e9, crop_aspect=aspect))
+    wanted = width / height if aspect == "original" else aspect
+    out_width, out_height = plan.size
+    assert abs(out_width / out_height - wanted) <= 1.0 / min(out_width, out_height) * 2
+    cols, rows = np.meshgrid(np.arange(out_width, dtype=float), np.arange(out_height,
+                                                                          dtype=float))
+    outputs = np.column_stack([cols.ravel(), rows.ravel()])
+    sources = camera_from_default(view, default_from_output(view, plan.frame, outputs))
+    assert (sources >= -1e-6).all()
+    assert (sources <= np.array([width - 1, height - 1]) + 1e-6).all()
+    unconstrained = plan_output(view, Framing(bbox="crop", max_stretch=1e9)).size
+    assert out_width * out_height <= unconstrained[0] * unconstrained[1] * 1.01
+    grown = (outputs - np.array([out_width, out_height]) / 2) * 1.03 + np.array(
+        [out_width, out_height]) / 2
+    reach = camera_from_default(view, default_from_output(view, plan.frame, grown))
+    assert ((reach < -0.5) | (reach > np.array([width - 0.5, height - 0.5]))).any()
+
+
 def test_the_package_maps_output_pixels_where_the_words_do():
     """``Plan.pixel_map`` agrees with the camera built from words, both ways, for the
     default, a scaled and an explicit frame (within 1e-6 px: two ways of computing)."""
