@@ -91,14 +91,23 @@ def sampled(path: Path, pixel_map, orientation: int = 1, border: int = 2) -> np.
 def test_a_reduced_decode_is_the_area_average_of_the_full_one(tmp_path):
     """libjpeg-turbo's scaled decoding as the map assumes it: reduced pixel ``k`` is the
     average of input pixels ``r k .. r (k + 1) - 1`` (centre ``(x + 0.5) / r - 0.5``), for
-    sides ``r`` does not divide too (the last, part pixel counted whole): within 40 dB of
-    ``cv2.INTER_AREA`` of the full decode, where a shift of a quarter of a reduced pixel
-    costs 10 dB or more."""
+    sides ``r`` does not divide too (the last, part pixel counted whole), for baseline,
+    progressive, grey, 4:4:4, 4:2:2 and restart-marked JPEGs: within 40 dB of
+    ``cv2.INTER_AREA`` of the full decode (measured: 42-54 dB), where a shift of a quarter of
+    a reduced pixel costs 10 dB or more."""
     image = photo(861, 597)  # neither side a multiple of 8 (nor of 2)
-    for name, options in {"baseline": {}, "progressive": {"progressive": True},
-                          "grey": {}}.items():
-        source = cv2.cvtColor(image, cv2.COLOR_BGR2GRAY) if name == "grey" else image
-        data = write_jpeg(tmp_path / f"{name}.jpg", source, **options).read_bytes()
+    samples = {name: write_jpeg(tmp_path / f"{name}.jpg", source, **options).read_bytes()
+               for name, source, options in [
+                   ("baseline", image, {}), ("progressive", image, {"progressive": True}),
+                   ("grey", cv2.cvtColor(image, cv2.COLOR_BGR2GRAY), {})]}
+    for name, params in {"444": [cv2.IMWRITE_JPEG_SAMPLING_FACTOR,
+                                 cv2.IMWRITE_JPEG_SAMPLING_FACTOR_444],
+                         "422": [cv2.IMWRITE_JPEG_SAMPLING_FACTOR,
+                                 cv2.IMWRITE_JPEG_SAMPLING_FACTOR_422],
+                         "restarts": [cv2.IMWRITE_JPEG_RST_INTERVAL, 2]}.items():
+        samples[name] = cv2.imencode(".jpg", image, [cv2.IMWRITE_JPEG_QUALITY, 95, *params]
+                                     )[1].tobytes()
+    for name, data in samples.items():
         full = decode_image(data)
         for reduction in (2, 4, 8):
             assert jpeg_reduction(data, reduction) == reduction
@@ -135,13 +144,15 @@ def test_the_reduction_is_the_largest_that_every_sampled_pixel_spans(scale, expe
 
 
 def test_a_preview_matches_the_full_decode_and_the_reference(tmp_path):
-    """A real photo at a fifth and a tenth of its size: decoded 4 and 8 times smaller,
+    """A real photo (colour, and grey) at a fifth and a tenth of its size: decoded 4 and 8
+    times smaller,
     the preview is close to the area-averaged reference (measured: 33.4 and 29.7 dB), no
     further from it than the full path's output is, less 1 dB (measured: 10 dB nearer), and
     within 20 dB of that output (measured: 23.6 and 21.6 dB; they differ in their filter, the
     DCT's box against the warp's Gaussian pyramid, which blurs more)."""
-    path = write_jpeg(tmp_path / "facade.jpg", photo())
-    for scale, expected in [(0.2, 4), (0.1, 8)]:
+    colour = write_jpeg(tmp_path / "facade.jpg", photo())
+    grey = write_jpeg(tmp_path / "grey.jpg", cv2.cvtColor(photo(), cv2.COLOR_BGR2GRAY))
+    for path, scale, expected in [(colour, 0.2, 4), (colour, 0.1, 8), (grey, 0.2, 4)]:
         pixel_map = plan_image(View(8, 4, 900), 868, 600, Framing(scale=scale)).pixel_map
         preview, full, reduction = both(path, pixel_map)
         assert reduction == expected
