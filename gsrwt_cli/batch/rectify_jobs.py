@@ -273,7 +273,11 @@ def process_job(job: Job, settings: Settings, scratch: Scratch | None = None) ->
             width, height = displayed_size(
                 orientation or 1, *measure_image_file(job.source, settings.max_input_pixels))
             info = _plan(view, width, height, _framed(settings, corners))  # big outputs refused
-            image = scratch.read(job.source, settings.max_input_pixels, orientation or 1)
+            # An antialiased output smaller than the input may come from a JPEG decoded
+            # reduced in the DCT (Scratch.read); at scale 1 and above, never.
+            preview = info.pixel_map if settings.antialias and info.frame.scale < 1 else None
+            image = scratch.read(job.source, settings.max_input_pixels, orientation or 1,
+                                 preview)
             dtype, channels = image.dtype, 1 if image.ndim == 2 else image.shape[2]
             del image  # the scratch holds it for the warp
             check_writable(

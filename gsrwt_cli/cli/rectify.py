@@ -507,7 +507,9 @@ def dask_executor(address: str, processes: int, retries: int,
               help="Value of pixels with no source, in the image's units (0-255, 0-65535).")
 @click.option("--antialias/--no-antialias", default=True, show_default=True,
               help="Area-filter where the output shrinks the input (an output pixel over 1.5 "
-                   "input pixels), so that fine detail does not alias.")
+                   "input pixels), so that fine detail does not alias; below scale 1 a JPEG "
+                   "is then decoded 2, 4 or 8 times smaller where every output pixel spans "
+                   "that many input pixels.")
 @click.option("--alpha", is_flag=True,
               help="Make pixels with no source transparent (adds an alpha channel).")
 @click.option("--ext", default=None,

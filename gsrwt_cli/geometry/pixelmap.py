@@ -208,6 +208,29 @@ class PixelMap:
         With ``source_size`` (the input's width and height), 1 where the output pixel has no
         source: outside the input nothing is sampled, however much the map shrinks there.
         """
+        shape, grid, values, sources = self._shrink_grid(step)
+        if source_size is not None:
+            values = np.where(self._sampling(grid, sources, source_size), values, 1.0)
+        return values.reshape(shape)
+
+    def least_shrink(self, source_size: tuple[int, int], step: int = 8) -> float:
+        """The least :meth:`shrink` over the output pixels that sample an input of
+        ``source_size`` (width, height): every output pixel with a source spans at least this
+        many input pixels (in the direction where it spans most, the antialiasing's measure);
+        ``inf`` when no output pixel has a source.
+
+        Conservative at the input's edges: grid points up to one grid step outside the input
+        count as sampling it, so that the shrink between the last grid point inside and the
+        edge is represented (it varies smoothly there).
+        """
+        _, grid, values, sources = self._shrink_grid(step)
+        sampled = self._sampling(grid, sources, source_size, margin=values * step)
+        return float(values[sampled].min()) if np.any(sampled) else math.inf
+
+    def _shrink_grid(self, step: int):
+        """``((rows, cols), grid, shrink, sources)`` of :meth:`shrink`: the output points of the
+        grid ``(N, 2)``, the shrink at each (1 where it is not finite) and, through a lens,
+        their input pixels (None for a pinhole: :meth:`to_input` finds them when needed)."""
         width, height = self.size
         cols = np.arange(0, width + step - 1, step, dtype=np.float64).clip(max=width - 1)
         rows = np.arange(0, height + step - 1, step, dtype=np.float64).clip(max=height - 1)
@@ -230,15 +253,49 @@ class PixelMap:
             b, d = ((at(row + along, col) - sources) * along[:, None]).T
             values = largest_singular_value(a, b, c, d)
         values = np.nan_to_num(values, nan=1.0, posinf=1.0)
-        if source_size is not None:
-            sources = self.to_input(grid) if sources is None else sources
-            w = grid @ np.linalg.inv(self.output_from_input)[2, :2] + np.linalg.inv(
-                self.output_from_input)[2, 2]
+        return (len(rows), len(cols)), grid, values, sources
+
+    def _sampling(self, grid: np.ndarray, sources: np.ndarray | None,
+                  source_size: tuple[int, int], margin: float | np.ndarray = 0.0
+                  ) -> np.ndarray:
+        """Which output points of ``grid`` have a source: in front of the horizon and inside
+        an input of ``source_size``'s pixel edges grown by ``margin`` input pixels."""
+        sources = self.to_input(grid) if sources is None else sources
+        inverse = np.linalg.inv(self.output_from_input)
+        w = grid @ inverse[2, :2] + inverse[2, 2]
+        with np.errstate(invalid="ignore"):
             inside = (w > 0) & np.all(np.isfinite(sources), axis=1)
-            inside &= (sources[:, 0] >= -0.5) & (sources[:, 0] <= source_size[0] - 0.5)
-            inside &= (sources[:, 1] >= -0.5) & (sources[:, 1] <= source_size[1] - 0.5)
-            values = np.where(inside, values, 1.0)
-        return values.reshape(len(rows), len(cols))
+            inside &= (sources[:, 0] >= -0.5 - margin)
+            inside &= (sources[:, 0] <= source_size[0] - 0.5 + margin)
+            inside &= (sources[:, 1] >= -0.5 - margin)
+            inside &= (sources[:, 1] <= source_size[1] - 0.5 + margin)
+        return inside
+
+    def reduced(self, factor: int, offset: tuple[float, float] = (0.0, 0.0)) -> PixelMap:
+        """This map onto the input reduced ``factor`` times, as libjpeg's scaled decoding
+        reduces it: reduced pixel ``k`` is input pixels ``factor k .. factor (k + 1) - 1``,
+        so with pixel centres at integers ``x_reduced = (x + 0.5) / factor - 0.5`` (the
+        pyramid's convention, :meth:`_resample`), plus ``offset`` (reduced pixels, per axis:
+        a reduced image mirrored along an axis whose length ``factor`` does not divide is
+        shifted by the part of a pixel its last one lacks).
+
+        Exact through a lens too: the lens's camera matrix becomes ``A K`` (``A``: reduced
+        from input pixels), so that the reduced lens distorts ``A p`` to ``A distort(p)``.
+        """
+        if self.output_lens is not None:
+            raise ValueError("a map with a lens on its output side has no reduced input")
+        scale = 1.0 / factor
+        reduced_from_input = np.array([[scale, 0.0, 0.5 * scale - 0.5 + offset[0]],
+                                       [0.0, scale, 0.5 * scale - 0.5 + offset[1]],
+                                       [0.0, 0.0, 1.0]])
+        homography = (np.asarray(self.output_from_input, dtype=np.float64)
+                      @ np.linalg.inv(reduced_from_input))
+        lens = None
+        if self.lens is not None:
+            matrix = reduced_from_input @ np.array(self.lens.camera_matrix, dtype=np.float64)
+            lens = LensDistortion(tuple(tuple(float(v) for v in row) for row in matrix),
+                                  self.lens.coefficients, self.lens.fisheye)
+        return PixelMap(homography, self.size, lens)
 
     def warp(
         self,

@@ -314,12 +314,64 @@ def _captured_stderr(messages: list[str]) -> Iterator[None]:
             messages.extend(line.strip() for line in text.splitlines() if line.strip())
 
 
-def _decode_jpeg(data: bytes, padded: bool = False,
-                 into: np.ndarray | None = None) -> np.ndarray | None:
+#: The reductions libjpeg-turbo's scaled decoding makes in the DCT, largest first (it has
+#: others, such as 3/8, whose pixels straddle the input's; gsrwt uses these three only).
+JPEG_REDUCTIONS = (8, 4, 2)
+#: Images with a side shorter than this are never decoded reduced (a preview of them costs
+#: nothing, and libjpeg's choice of factor is unambiguous above it).
+_LEAST_REDUCED_SIDE = 64
+
+
+def reduced_size(width: int, height: int, reduction: int) -> tuple[int, int]:
+    """``(width, height)`` of an image decoded ``reduction`` times smaller in the DCT: its last
+    pixel of a side ``reduction`` does not divide is a part pixel, counted whole."""
+    return -(-width // reduction), -(-height // reduction)
+
+
+def jpeg_reduction(data: bytes, wanted: int) -> int:
+    """The largest of :data:`JPEG_REDUCTIONS` up to ``wanted`` that :func:`decode_image`
+    decodes the JPEG ``data`` at, 1 for none: a JPEG libjpeg-turbo decodes here (grey or
+    YCbCr, not CMYK or 12-bit) whose sides are at least 64 pixels, and whose reduced size
+    libjpeg-turbo confirms (:func:`reduced_size`)."""
+    import simplejpeg
+
+    if data[:3] != b"\xff\xd8\xff":
+        return 1
+    try:
+        height, width, colorspace, _ = simplejpeg.decode_jpeg_header(data)
+    except ValueError:
+        return 1
+    if colorspace not in ("Gray", "YCbCr") or min(width, height) < _LEAST_REDUCED_SIDE:
+        return 1
+    for reduction in JPEG_REDUCTIONS:
+        if reduction > wanted:
+            continue
+        small_width, small_height = reduced_size(width, height, reduction)
+        scaled = simplejpeg.decode_jpeg_header(data, min_height=small_height,
+                                               min_width=small_width)
+        if scaled[:2] == (small_height, small_width):
+            return reduction
+    return 1
+
+
+def preview_reduction(pixel_map: PixelMap, source_size: tuple[int, int]) -> int:
+    """The largest of :data:`JPEG_REDUCTIONS` by which an input of ``source_size`` (width,
+    height, as the map sees it) may be decoded for ``pixel_map``, 1 for none: every output
+    pixel that samples the input spans at least that many input pixels
+    (:meth:`~gsrwt_cli.geometry.pixelmap.PixelMap.least_shrink`, the antialiasing's measure),
+    so the reduced input is nowhere magnified where the antialiased warp of the whole input
+    samples a pyramid level at least as coarse."""
+    shrink = pixel_map.least_shrink(source_size, step=16)
+    return next((r for r in JPEG_REDUCTIONS if r <= shrink * (1 + 1e-6)), 1)
+
+
+def _decode_jpeg(data: bytes, padded: bool = False, into: np.ndarray | None = None,
+                 reduction: int = 1) -> np.ndarray | None:
     """A grey or colour JPEG decoded by libjpeg-turbo (simplejpeg), as OpenCV would decode
     it (grey, or BGR; BGRA with an opaque fourth channel if ``padded``), into the memory of
     ``into`` if it is padded and ``into`` is big enough; None for any other JPEG (CMYK,
-    12-bit: OpenCV's job).
+    12-bit: OpenCV's job). ``reduction``: decoded that many times smaller in the DCT
+    (:func:`jpeg_reduction` says which the file allows).
 
     libjpeg reports damaged data as warnings; simplejpeg's strict mode raises them, so a
     damaged JPEG is an error here with libjpeg's own words, with nothing to capture.
@@ -332,19 +384,23 @@ def _decode_jpeg(data: bytes, padded: bool = False,
         return None
     if colorspace not in ("Gray", "YCbCr"):
         return None
+    width, height = reduced_size(width, height, reduction)
     space = "GRAY" if colorspace == "Gray" else "BGRA" if padded else "BGR"
     channels = {"GRAY": 1, "BGR": 3, "BGRA": 4}[space]
     if space != "BGRA" or into is not None and into.nbytes < height * width * channels:
         into = None  # only the warp's BGRA goes into the caller's memory
+    minimum = {"min_height": height, "min_width": width} if reduction > 1 else {}
     try:
-        image = simplejpeg.decode_jpeg(data, colorspace=space, buffer=into, strict=True)
+        image = simplejpeg.decode_jpeg(data, colorspace=space, buffer=into, strict=True,
+                                       **minimum)
     except ValueError as error:
         raise ImageError(f"corrupt JPEG ({one_line(str(error), 200)})") from None
     return image[..., 0] if space == "GRAY" else image
 
 
 def decode_image(data: bytes, max_pixels: float = DEFAULT_MAX_INPUT_PIXELS, *,
-                 padded: bool = False, into: np.ndarray | None = None) -> np.ndarray:
+                 padded: bool = False, into: np.ndarray | None = None,
+                 reduction: int = 1) -> np.ndarray:
     """Decode an image file's bytes as stored: 8/16-bit or float, grey, BGR or BGRA.
 
     The header is measured first (:func:`header_size`): an image of more than ``max_pixels``
@@ -353,13 +409,20 @@ def decode_image(data: bytes, max_pixels: float = DEFAULT_MAX_INPUT_PIXELS, *,
     checked, never trusted. EXIF orientation is not applied here (:func:`read_image` and
     :meth:`Scratch.read` apply it). JPEGs are decoded by :func:`_decode_jpeg` (``padded``: a
     colour JPEG as BGRA with an opaque fourth channel, for the warp; ``into``: memory to
-    decode it into), other files by OpenCV.
+    decode it into), other files by OpenCV. ``reduction``: a JPEG decoded that many times
+    smaller in the DCT (:func:`reduced_size`), one :func:`jpeg_reduction` allows (else
+    ``ValueError``).
     """
     if not data:
         raise ImageError("empty file")
     width, height = check_input_size(header_size(data), max_pixels)
     _check_complete(data)
-    image = _decode_jpeg(data, padded, into) if data[:3] == b"\xff\xd8\xff" else None
+    if reduction != 1:
+        if jpeg_reduction(data, reduction) != reduction:
+            raise ValueError(f"this image cannot be decoded {reduction} times smaller")
+        width, height = reduced_size(width, height, reduction)
+    image = (_decode_jpeg(data, padded, into, reduction) if data[:3] == b"\xff\xd8\xff"
+             else None)
     if image is not None:
         if image.shape[:2] != (height, width):
             raise ImageError(f"its header says {width}x{height} pixels but it decodes as "
@@ -511,6 +574,7 @@ class Scratch:
         self._decoded: np.ndarray | None = None
         self._padded = False  # the decoded image is a JPEG's BGRA, fourth channel opaque
         self._icc = b""  # the JPEG's ICC profile segments, if they describe it, for its output
+        self._reduced: tuple[int, tuple[float, float]] = (1, (0.0, 0.0))  # see :meth:`read`
 
     def array(self, region: int, shape: tuple[int, ...], dtype: np.dtype) -> np.ndarray:
         """An uninitialized array of ``shape`` and ``dtype`` in ``region`` (0 or 1)."""
@@ -521,10 +585,23 @@ class Scratch:
             self._regions[region] = np.empty(nbytes, np.uint8)
         return self._regions[region][:nbytes].view(dtype).reshape(shape)
 
+    @property
+    def reduction(self) -> int:
+        """How many times smaller than stored the image :meth:`read` decoded is (1, 2, 4 or
+        8: a preview's JPEG decoded reduced in the DCT)."""
+        return self._reduced[0]
+
     def read(self, path: str | Path, max_pixels: float = DEFAULT_MAX_INPUT_PIXELS,
-             orientation: int = 1) -> np.ndarray:
+             orientation: int = 1, preview: PixelMap | None = None) -> np.ndarray:
         """Decode an image (:func:`read_image`) for :meth:`warp`, and return it, as its EXIF
         ``orientation`` displays it (:func:`displayed_pixels`; 1: as stored).
+
+        ``preview``: the map the image will be warped by, given when the output may be made
+        from a reduced input (an output smaller than the input, antialiased): a JPEG is then
+        decoded reduced in the DCT by :func:`preview_reduction` (as far as
+        :func:`jpeg_reduction` allows; :attr:`reduction` says how far), at a fraction of a
+        full decode's cost, and :meth:`warp` maps onto the reduced pixels. Other files, and
+        maps that do not shrink every sampled pixel by 2 or more, decode whole.
 
         The previous image is dropped first, so a failure never leaves its pixels behind.
         """
@@ -535,15 +612,22 @@ class Scratch:
             jpeg_components,
         )
 
-        self._decoded, self._padded = None, False
+        self._decoded, self._padded, self._reduced = None, False, (1, (0.0, 0.0))
         data = read_file_bytes(path)
         self._icc = icc_segments(data)
         if icc_colour_space(self._icc) != ICC_COLOUR_SPACES.get(jpeg_components(data)):
             self._icc = b""  # a profile that does not describe its own JPEG describes nothing
         size = header_size(data) if data[:3] == b"\xff\xd8\xff" else None
         if size is not None and size[0] * size[1] <= max_pixels:
-            into = self.array(1, (size[0] * size[1] * 4,), np.uint8)
-            image = decode_image(data, max_pixels, padded=True, into=into)
+            reduction = 1
+            if preview is not None:
+                shown = (size[1], size[0]) if orientation_steps(orientation)[0] else size
+                reduction = jpeg_reduction(data, preview_reduction(preview, shown))
+            width, height = reduced_size(*size, reduction)
+            into = self.array(1, (width * height * 4,), np.uint8)
+            image = decode_image(data, max_pixels, padded=True, into=into,
+                                 reduction=reduction)
+            self._reduced = reduction, _reduced_offset(orientation, size, reduction)
             self._padded = image.ndim == 3 and image.shape[2] == 4
         else:
             # Both regions are given back before OpenCV decodes: its own frames reuse their
@@ -564,11 +648,17 @@ class Scratch:
         alpha: bool = False,
         antialias: bool = False,
     ) -> Working:
-        """Warp the image :meth:`read` decoded (see :func:`warp_working`)."""
+        """Warp the image :meth:`read` decoded (see :func:`warp_working`). ``pixel_map``: from
+        the whole input as displayed, even when :meth:`read` decoded it reduced (the map is
+        then turned onto the reduced pixels, :meth:`~gsrwt_cli.geometry.pixelmap.PixelMap.
+        reduced`)."""
         image, padded_jpeg = self._decoded, self._padded
         self._decoded, self._padded = None, False
         if image is None:
             raise RuntimeError("Scratch.warp needs an image from Scratch.read first")
+        reduction, offset = self._reduced
+        if reduction > 1:
+            pixel_map = pixel_map.reduced(reduction, offset)
         width, height = pixel_map.size
         channels = 1 if image.ndim == 2 else image.shape[2]
         converts = channels == 3 or (alpha and channels == 1)
@@ -598,6 +688,19 @@ class Scratch:
                 and icc_colour_space(self._icc) == ICC_COLOUR_SPACES.get(channels)):
             encoded = with_segments(encoded, self._icc)
         return encoded
+
+
+def _reduced_offset(orientation: int, stored_size: tuple[int, int], reduction: int
+                    ) -> tuple[float, float]:
+    """What :meth:`~gsrwt_cli.geometry.pixelmap.PixelMap.reduced` adds to a displayed image's
+    reduced pixels when the stored image was reduced and then turned: along a displayed
+    axis counted from the other side (mirrored), a side ``reduction`` does not divide puts
+    the reduced image's part pixel first, shifting it by what that pixel lacks."""
+    swap, flip_x, flip_y = orientation_steps(orientation)
+    width, height = (stored_size[1], stored_size[0]) if swap else stored_size
+    small_width, small_height = reduced_size(width, height, reduction)
+    return (small_width - width / reduction if flip_x else 0.0,
+            small_height - height / reduction if flip_y else 0.0)
 
 
 # --------------------------------------------------------------------------------------------

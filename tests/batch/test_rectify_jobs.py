@@ -14,6 +14,7 @@ import cv2
 import numpy as np
 import pytest
 
+from gsrwt_cli.api.rectify import plan_image
 from gsrwt_cli.batch.rectify_jobs import (
     NOT_MADE_SO,
     RECTIFY_COLUMNS,
@@ -23,6 +24,9 @@ from gsrwt_cli.batch.rectify_jobs import (
     process_job,
 )
 from gsrwt_cli.batch.settings import Settings
+from gsrwt_cli.geometry.camera import View
+from gsrwt_cli.geometry.framing import Framing
+from gsrwt_cli.imaging.images import Scratch
 from gsrwt_cli.inputs.sidecar import load_sidecar
 from gsrwt_cli.inputs.sources import Source, sources_from_directory
 from tests.helpers.camera import expected_rectified, render_view
@@ -152,3 +156,34 @@ def test_plan_jobs_mirrors_the_tree_and_finds_each_images_parameters(tmp_path):
     errors = {str(job.source.relative_to(root)): job.error for job in without}
     assert errors["sub/c.png"] is None
     assert errors["a.png"].startswith("no parameters: not in ")
+
+
+@pytest.mark.parametrize(("values", "framing", "antialias", "reduced"), [
+    # scale 1, in a corner of the frame where every pixel spans over 2.1 input pixels
+    ({"pan": 60, "tilt": 0, "focal": 120}, Framing(bbox=(343, 41, 351, 197)), True, False),
+    ({"pan": 25, "tilt": -15, "focal": 400}, Framing(scale=0.2), False, False),
+    ({"pan": 25, "tilt": -15, "focal": 400}, Framing(scale=0.2), True, True),
+])
+def test_previews_decode_reduced_only_below_scale_one_with_antialiasing(
+        photo, tmp_path, values, framing, antialias, reduced):
+    """A JPEG's output is made from its decode 2-8 times smaller only when it is smaller
+    than the input (scale below 1) and antialiased: at scale 1, even where every output pixel
+    spans 2 input pixels or more, and without antialiasing, the output file is byte for byte
+    the full decode's warp; a preview's is close to it (20 dB: their filters differ)."""
+    path = tmp_path / "wall.jpg"
+    cv2.imwrite(str(path), cv2.imread(str(photo[0])), [cv2.IMWRITE_JPEG_QUALITY, 95])
+    out = tmp_path / "out"
+    settings = Settings(root=out, framing=framing, antialias=antialias)
+    row = process_job(job_for(path, out, values=values), settings)
+    assert row["status"] == "ok", row
+    info = plan_image(View(values["pan"], values["tilt"], values["focal"]), 320, 240, framing)
+    assert (info.frame.scale < 1) == (framing.scale < 1)
+    scratch = Scratch()
+    scratch.read(path)
+    full = scratch.encode(scratch.warp(info.pixel_map, antialias=antialias), ".jpg")
+    made = (out / "wall.jpg").read_bytes()
+    assert (made != full) == reduced
+    if reduced:
+        decoded = [cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_COLOR)
+                   for data in (made, full)]
+        assert psnr(*decoded, np.ones(decoded[0].shape[:2], bool)) > 20

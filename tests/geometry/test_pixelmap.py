@@ -120,3 +120,62 @@ def test_the_region_beyond_the_horizon_starts_where_the_camera_plane_meets_the_w
     assert facing.beyond_horizon() is None and facing.sees((320, 240))
     assert not facing.then(np.array([[1.0, 0, -1000], [0, 1, 0], [0, 0, 1]]),
                            (100, 100)).sees((320, 240))
+
+
+# --------------------------------------------------------------------------------------------
+# A reduced input (a JPEG decoded 2, 4 or 8 times smaller in the DCT)
+# --------------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("name", [None, *LENSES])
+@pytest.mark.parametrize(("factor", "offset"), [(2, (0.0, 0.0)), (4, (0.75, 0.0)),
+                                                (8, (0.0, 0.25))])
+def test_a_reduced_map_is_the_map_in_reduced_pixels(name, factor, offset):
+    """``PixelMap.reduced``: every output pixel maps to its input pixel in the reduced image's
+    pixels, ``(x + 0.5) / factor - 0.5 + offset`` (pixel centres at integers), through a
+    pinhole and through each lens model (the lens's camera matrix turned with the pixels);
+    the output side (its size, which pixels have no source beyond the horizon) is the same."""
+    view = View(20, -12, FOCAL, width=WIDTH, height=HEIGHT,
+                lens=None if name is None else LENSES[name])
+    pixel_map = plan_output(view, Framing(scale=0.3)).pixel_map
+    reduced = pixel_map.reduced(factor, offset)
+    outputs = output_grid(pixel_map.size)
+    full = pixel_map.to_input(outputs)
+    finite = np.all(np.isfinite(full), axis=1)
+    assert finite.sum() > 40
+    expected = (full[finite] + 0.5) / factor - 0.5 + np.array(offset)
+    np.testing.assert_allclose(reduced.to_input(outputs)[finite], expected, atol=1e-6)
+    assert reduced.size == pixel_map.size
+    horizon = np.linalg.inv(np.asarray(pixel_map.output_from_input, dtype=float))[2]
+    np.testing.assert_allclose(np.linalg.inv(reduced.output_from_input)[2], horizon,
+                               rtol=1e-12)
+
+
+def test_the_least_shrink_is_the_least_of_every_pixel_that_samples_the_input():
+    """``PixelMap.least_shrink``: over every output pixel whose source lies inside the input
+    (checked pixel by pixel, against :meth:`shrink` at step 1), never more than the least
+    shrink there (it may decide a reduction), and within 2 % of it (not needlessly low);
+    ``inf`` when no output pixel has a source."""
+    for view, framing in [(View(50, 20, 400, width=WIDTH, height=HEIGHT),
+                           Framing(bbox="full", scale=0.25)),
+                          (View(-30, 35, 300, width=WIDTH, height=HEIGHT),
+                           Framing(bbox="full", scale=0.2)),
+                          (View(20, -25, 500, width=WIDTH, height=HEIGHT),  # the input's
+                           Framing(bbox=(-245, -220, 990, 1040), scale=0.25)),  # edge inside
+                          (View(0, 0, 500, width=WIDTH, height=HEIGHT), Framing(scale=0.2)),
+                          (View(25, 10, FOCAL, width=WIDTH, height=HEIGHT,
+                                lens=LENSES["plumb_bob"]), Framing(scale=0.3))]:
+        pixel_map = plan_output(view, framing).pixel_map
+        every = pixel_map.shrink(1, (WIDTH, HEIGHT))
+        width, height = pixel_map.size
+        cols, rows = np.meshgrid(np.arange(width, dtype=float), np.arange(height, dtype=float))
+        sources = pixel_map.to_input(np.column_stack([cols.ravel(), rows.ravel()]))
+        with np.errstate(invalid="ignore"):
+            inside = np.all((sources >= -0.5) & (sources <= [WIDTH - 0.5, HEIGHT - 0.5]),
+                            axis=1).reshape(every.shape)
+        truth = every[inside].min()
+        least = pixel_map.least_shrink((WIDTH, HEIGHT))
+        assert truth * 0.98 <= least <= truth, (view, truth, least)
+        assert every.max() > 1.3 * truth or view.pan == 0  # a shrink that varies
+    far_away = PixelMap(np.array([[0.5, 0, -5000], [0, 0.5, -5000], [0, 0, 1]]), (100, 100))
+    assert far_away.least_shrink((WIDTH, HEIGHT)) == math.inf
