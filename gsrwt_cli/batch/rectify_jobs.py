@@ -29,6 +29,7 @@ from ..geometry.framing import Plan
 from ..geometry.orientation import displayed_size
 from ..imaging.images import (
     Scratch,
+    canonical_extension,
     check_writable,
     file_orientation,
     image_file_size,
@@ -47,7 +48,7 @@ from ..tables.rows import params_row, plan_row
 from .executor import Executor, ProcessExecutor
 from .in_order import run_in_order
 from .job_errors import JobError, error_text
-from .reruns import differences, is_regular_file, made_with, record_of
+from .reruns import differences, is_regular_file, lens_word, made_with, record_of
 from .settings import Describe, Settings  # noqa: F401  (named here too)
 from .workers import ProcessWorker
 
@@ -219,6 +220,53 @@ def _plan(view: View, width: int, height: int, settings: Settings) -> Plan:
     return plan_image(view, width, height, settings.framing)
 
 
+def metadata_record(info: Plan, orientation: int | None, input_size: tuple[int, int]
+                    ) -> dict[str, str]:
+    """What gsrwt did to an image, as the XMP properties of its output
+    (:func:`~gsrwt_cli.io.metadata.xmp_packet`; docs/COMMANDS.md): the version, the pose, the
+    camera (focal lengths and principal point in pixels of the displayed photo, the lens
+    undone), the EXIF orientation applied, the sizes, and the homography (row-major, output
+    pixel <- input pixel, after the lens; as the table's ``homography``)."""
+    from .. import __version__
+
+    view = info.view
+    intrinsics = view.intrinsics
+    number = "{:.12g}".format
+    return {
+        "Version": __version__,
+        "Pan": number(view.pan), "Tilt": number(view.tilt), "Roll": number(view.roll),
+        "Fx": number(intrinsics.fx), "Fy": number(intrinsics.fy),
+        "Cx": number(intrinsics.cx), "Cy": number(intrinsics.cy),
+        "Lens": lens_word(intrinsics.lens),
+        "Orientation": _orientation_cell(orientation),
+        "InputSize": "{}x{}".format(*input_size), "OutputSize": "{}x{}".format(*info.size),
+        "Homography": plan_row(info)["homography"],
+    }
+
+
+def _with_metadata(encoded: bytes, job: Job, settings: Settings, scratch: Scratch, info: Plan,
+                   orientation: int | None, input_size: tuple[int, int]) -> tuple[bytes, str]:
+    """The encoded output with the input's EXIF and gsrwt's record
+    (:func:`~gsrwt_cli.io.metadata.with_metadata`), and the row's ``metadata`` cell; without
+    them when the input has none, its EXIF is damaged, or the output cannot hold it."""
+    from ..io.metadata import METADATA_FORMATS, MetadataError, with_metadata
+
+    if not settings.metadata:
+        return encoded, "stripped"
+    if scratch.exif_problem is not None:
+        return encoded, "damaged"
+    if scratch.exif is None:
+        return encoded, "none"
+    extension = canonical_extension(job.output.suffix)
+    if extension not in METADATA_FORMATS:
+        return encoded, "unsupported"
+    record = metadata_record(info, orientation, input_size)
+    try:
+        return with_metadata(encoded, extension, info.size, scratch.exif, record), "kept"
+    except MetadataError:
+        return encoded, "unsupported"
+
+
 def process_job(job: Job, settings: Settings, scratch: Scratch | None = None) -> dict[str, Any]:
     """Rectify one image and return its table row; never raises for a bad image.
 
@@ -252,7 +300,8 @@ def process_job(job: Job, settings: Settings, scratch: Scratch | None = None) ->
             width, height = displayed_size(
                 orientation or 1, *measure_image_file(job.source, settings.max_input_pixels))
             info = _plan(view, width, height, _framed(job, settings))  # big outputs refused
-            image = scratch.read(job.source, settings.max_input_pixels, orientation or 1)
+            image = scratch.read(job.source, settings.max_input_pixels, orientation or 1,
+                                 exif=settings.metadata)
             dtype, channels = image.dtype, 1 if image.ndim == 2 else image.shape[2]
             del image  # the scratch holds it for the warp
             check_writable(
@@ -266,6 +315,8 @@ def process_job(job: Job, settings: Settings, scratch: Scratch | None = None) ->
                 )
                 encoded = scratch.encode(warped, job.output.suffix, settings.quality)
                 del warped
+                encoded, row["metadata"] = _with_metadata(encoded, job, settings, scratch,
+                                                          info, orientation, (width, height))
                 if checking:
                     with open_input(job.output) as handle:
                         if handle.read(len(encoded) + 1) != encoded:

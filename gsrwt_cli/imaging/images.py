@@ -18,7 +18,7 @@ import threading
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
-from typing import IO
+from typing import IO, TYPE_CHECKING
 
 import cv2
 import imagesize
@@ -28,6 +28,9 @@ from ..base.messages import one_line
 from ..geometry.orientation import ORIENTATION_TAG, orientation_steps, valid_orientation
 from ..geometry.pixelmap import PixelMap
 from ..io.storage import open_input
+
+if TYPE_CHECKING:
+    from ..io.metadata import PhotoExif
 
 #: File types gsrwt looks for in directories (OpenCV reads them all).
 IMAGE_EXTENSIONS = (".jpg", ".jpeg", ".jpe", ".png", ".tif", ".tiff", ".bmp", ".webp")
@@ -511,6 +514,11 @@ class Scratch:
         self._decoded: np.ndarray | None = None
         self._padded = False  # the decoded image is a JPEG's BGRA, fourth channel opaque
         self._icc = b""  # the JPEG's ICC profile segments, if they describe it, for its output
+        #: The EXIF of the image :meth:`read` read last, cleaned for its output, when asked
+        #: for (:func:`~gsrwt_cli.io.metadata.photo_exif`); None if it has none.
+        self.exif: PhotoExif | None = None
+        #: Why that EXIF could not be read (a damaged block), else None.
+        self.exif_problem: str | None = None
 
     def array(self, region: int, shape: tuple[int, ...], dtype: np.dtype) -> np.ndarray:
         """An uninitialized array of ``shape`` and ``dtype`` in ``region`` (0 or 1)."""
@@ -522,9 +530,11 @@ class Scratch:
         return self._regions[region][:nbytes].view(dtype).reshape(shape)
 
     def read(self, path: str | Path, max_pixels: float = DEFAULT_MAX_INPUT_PIXELS,
-             orientation: int = 1) -> np.ndarray:
+             orientation: int = 1, exif: bool = False) -> np.ndarray:
         """Decode an image (:func:`read_image`) for :meth:`warp`, and return it, as its EXIF
-        ``orientation`` displays it (:func:`displayed_pixels`; 1: as stored).
+        ``orientation`` displays it (:func:`displayed_pixels`; 1: as stored). ``exif``: also
+        keep its EXIF for its output (:attr:`exif`, :attr:`exif_problem`), from the bytes
+        read for decoding (no read of its own).
 
         The previous image is dropped first, so a failure never leaves its pixels behind.
         """
@@ -534,9 +544,16 @@ class Scratch:
             icc_segments,
             jpeg_components,
         )
+        from ..io.metadata import MetadataError, photo_exif
 
         self._decoded, self._padded = None, False
+        self.exif, self.exif_problem = None, None
         data = read_file_bytes(path)
+        if exif:
+            try:
+                self.exif = photo_exif(data)
+            except MetadataError as error:
+                self.exif_problem = str(error)
         self._icc = icc_segments(data)
         if icc_colour_space(self._icc) != ICC_COLOUR_SPACES.get(jpeg_components(data)):
             self._icc = b""  # a profile that does not describe its own JPEG describes nothing

@@ -18,6 +18,7 @@ from ..base.messages import QUOTE_LIMIT, escape_controls, quote, shorten
 from ..base.numerals import parse_decimal, parse_whole
 from .columns import (
     FOCAL_SOURCES,
+    METADATA_VALUES,
     ORIENTATION_VALUES,
     PARAMS_COLUMNS,
     POSE_SOURCES,
@@ -238,6 +239,7 @@ RECTIFY_TABLE = TableSchema(
      "focal_source": choice(*FOCAL_SOURCES, optional=True),
      "pose_source": choice(*POSE_SOURCES, optional=True),
      "orientation": choice(*ORIENTATION_VALUES, optional=True),
+     "metadata": choice(*METADATA_VALUES, optional=True),
      "status": choice(*RECTIFY_STATUSES)},
 )
 
