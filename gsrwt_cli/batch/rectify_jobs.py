@@ -249,7 +249,7 @@ def _with_metadata(encoded: bytes, job: Job, settings: Settings, scratch: Scratc
     """The encoded output with the input's EXIF and gsrwt's record
     (:func:`~gsrwt_cli.io.metadata.with_metadata`), and the row's ``metadata`` cell; without
     them when the input has none, its EXIF is damaged, or the output cannot hold it."""
-    from ..io.metadata import METADATA_FORMATS, MetadataError, with_metadata
+    from ..io.metadata import METADATA_FORMATS, DamagedExifError, MetadataError, with_metadata
 
     if not settings.metadata:
         return encoded, "stripped"
@@ -263,7 +263,9 @@ def _with_metadata(encoded: bytes, job: Job, settings: Settings, scratch: Scratc
     record = metadata_record(info, orientation, input_size)
     try:
         return with_metadata(encoded, extension, info.size, scratch.exif, record), "kept"
-    except MetadataError:
+    except DamagedExifError:
+        return encoded, "damaged"
+    except MetadataError:  # too large for the format
         return encoded, "unsupported"
 
 
