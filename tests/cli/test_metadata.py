@@ -119,8 +119,8 @@ def test_strip_metadata_writes_the_same_pixels_and_nothing_else(
         assert _rows(stripped)[f"{name}.jpg"]["metadata"] == "stripped"
         data = (stripped / f"{name}.{fmt}").read_bytes()
         assert _photo_tags(exif_tags(data)) == [] and xmp_of(data) is None, name
-        with_metadata, without = _pixels(kept / f"{name}.{fmt}"), _pixels(stripped / f"{name}.{fmt}")
-        assert with_metadata.dtype == without.dtype and np.array_equal(with_metadata, without)
+        carrying, bare = _pixels(kept / f"{name}.{fmt}"), _pixels(stripped / f"{name}.{fmt}")
+        assert carrying.dtype == bare.dtype and np.array_equal(carrying, bare)
     assert (kept / f"turned.{fmt}").read_bytes() != (stripped / f"turned.{fmt}").read_bytes()
 
 

@@ -119,10 +119,7 @@ def xmp_of(data: bytes) -> bytes | None:
     """An image file's XMP packet as Pillow finds it (JPEG APP1, PNG iTXt, WebP chunk, TIFF
     tag 700), or None."""
     with Image.open(io.BytesIO(data)) as image:
-        if image.format == "TIFF":
-            packet = image.tag_v2.get(700)
-        else:
-            packet = image.info.get("xmp")
+        packet = image.tag_v2.get(700) if image.format == "TIFF" else image.info.get("xmp")
     if isinstance(packet, str):
         packet = packet.encode()
     return packet
