@@ -29,6 +29,7 @@ from ..geometry.framing import Plan
 from ..geometry.orientation import displayed_size
 from ..imaging.images import (
     Scratch,
+    Working,
     canonical_extension,
     check_writable,
     file_orientation,
@@ -244,29 +245,47 @@ def metadata_record(info: Plan, orientation: int | None, input_size: tuple[int, 
     }
 
 
-def _with_metadata(encoded: bytes, job: Job, settings: Settings, scratch: Scratch, info: Plan,
-                   orientation: int | None, input_size: tuple[int, int]) -> tuple[bytes, str]:
-    """The encoded output with the input's EXIF and gsrwt's record
-    (:func:`~gsrwt_cli.io.metadata.with_metadata`), and the row's ``metadata`` cell; without
-    them when the input has none, its EXIF is damaged, or the output cannot hold it."""
-    from ..io.metadata import METADATA_FORMATS, DamagedExifError, MetadataError, with_metadata
+def _encoded(warped: Working, job: Job, settings: Settings, scratch: Scratch, info: Plan,
+             orientation: int | None, input_size: tuple[int, int]) -> tuple[bytes, str]:
+    """The output's bytes (:meth:`~gsrwt_cli.imaging.images.Scratch.encode`) with the input's
+    EXIF and gsrwt's record (:func:`~gsrwt_cli.io.metadata.with_metadata`; a JPEG's put into
+    its header with its colour profile, in one insertion), and the row's ``metadata`` cell;
+    without them when the input has none, its EXIF is damaged, or the output cannot hold
+    it."""
+    from ..io.metadata import (
+        METADATA_FORMATS,
+        DamagedExifError,
+        MetadataError,
+        jpeg_segments,
+        with_metadata,
+    )
 
+    suffix, quality = job.output.suffix, settings.quality
+    extension = canonical_extension(suffix)
+    encoded = None
     if not settings.metadata:
-        return encoded, "stripped"
-    if scratch.exif_problem is not None:
-        return encoded, "damaged"
-    if scratch.exif is None:
-        return encoded, "none"
-    extension = canonical_extension(job.output.suffix)
-    if extension not in METADATA_FORMATS:
-        return encoded, "unsupported"
-    record = metadata_record(info, orientation, input_size)
-    try:
-        return with_metadata(encoded, extension, info.size, scratch.exif, record), "kept"
-    except DamagedExifError:
-        return encoded, "damaged"
-    except MetadataError:  # too large for the format
-        return encoded, "unsupported"
+        status = "stripped"
+    elif scratch.exif_problem is not None:
+        status = "damaged"
+    elif scratch.exif is None:
+        status = "none"
+    elif extension not in METADATA_FORMATS:
+        status = "unsupported"
+    else:
+        record = metadata_record(info, orientation, input_size)
+        try:
+            if extension == ".jpg":
+                segments = jpeg_segments(info.size, scratch.exif, record)
+                return scratch.encode(warped, suffix, quality, segments), "kept"
+            encoded = scratch.encode(warped, suffix, quality)
+            return with_metadata(encoded, extension, info.size, scratch.exif, record), "kept"
+        except DamagedExifError:
+            status = "damaged"
+        except MetadataError:  # too large for the format
+            status = "unsupported"
+    if encoded is None:
+        encoded = scratch.encode(warped, suffix, quality)
+    return encoded, status
 
 
 def process_job(job: Job, settings: Settings, scratch: Scratch | None = None) -> dict[str, Any]:
@@ -315,10 +334,9 @@ def process_job(job: Job, settings: Settings, scratch: Scratch | None = None) ->
                     info.pixel_map, settings.interpolation, settings.fill, settings.alpha,
                     settings.antialias,
                 )
-                encoded = scratch.encode(warped, job.output.suffix, settings.quality)
+                encoded, row["metadata"] = _encoded(warped, job, settings, scratch, info,
+                                                    orientation, (width, height))
                 del warped
-                encoded, row["metadata"] = _with_metadata(encoded, job, settings, scratch,
-                                                          info, orientation, (width, height))
                 if checking:
                     with open_input(job.output) as handle:
                         if handle.read(len(encoded) + 1) != encoded:

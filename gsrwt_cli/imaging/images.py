@@ -601,20 +601,24 @@ class Scratch:
         out = self.array(0, out_shape, source.pixels.dtype)
         return warp_working(source, pixel_map, interpolation, fill, alpha, out, antialias)
 
-    def encode(self, warped: Working, extension: str, quality: int = 95) -> bytes:
+    def encode(self, warped: Working, extension: str, quality: int = 95,
+               segments: bytes = b"") -> bytes:
         """:func:`encode_image` of what :meth:`warp` gave; a JPEG made from a JPEG keeps its
         colour profile (the input's ICC segments, as they were) where its colour model is
         kept: the profile's colour space is the input's and the output's (grey in, grey out;
-        RGB in, RGB out). A CMYK JPEG, decoded to BGR, loses its CMYK profile."""
+        RGB in, RGB out). A CMYK JPEG, decoded to BGR, loses its CMYK profile. ``segments``:
+        more marker segments for a JPEG's header (its EXIF and XMP), put before the profile
+        in the same insertion (one copy of the encoded image, not two)."""
         from ..io.jpeg_stream import ICC_COLOUR_SPACES, icc_colour_space, with_segments
 
         encoded = encode_image(warped, extension, quality)
+        if canonical_extension(extension) != ".jpg":
+            return encoded
         channels = 3 if warped.padded else 1 if warped.pixels.ndim == 2 else (
             warped.pixels.shape[2])
-        if (canonical_extension(extension) == ".jpg" and self._icc
-                and icc_colour_space(self._icc) == ICC_COLOUR_SPACES.get(channels)):
-            encoded = with_segments(encoded, self._icc)
-        return encoded
+        if self._icc and icc_colour_space(self._icc) == ICC_COLOUR_SPACES.get(channels):
+            segments += self._icc
+        return with_segments(encoded, segments)
 
 
 # --------------------------------------------------------------------------------------------

@@ -145,4 +145,5 @@ def with_segments(jpeg: bytes, segments: bytes) -> bytes:
         return jpeg
     header = header_segments(jpeg)
     at = header[0][2] if header and header[0][0] == _APP0 else 2
-    return jpeg[:at] + segments + jpeg[at:]
+    whole = memoryview(jpeg)
+    return b"".join((whole[:at], segments, whole[at:]))  # one copy of the image data

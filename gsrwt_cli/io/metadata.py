@@ -116,15 +116,16 @@ def _png_chunks(data: bytes) -> list[tuple[bytes, int, int]]:
     return chunks
 
 
-def _riff_chunks(data: bytes) -> list[tuple[bytes, bytes]]:
-    """``(fourcc, payload)`` of a WebP's chunks, those before a cut one."""
-    chunks, position = [], 12
+def _riff_chunks(data: bytes) -> list[tuple[bytes, memoryview]]:
+    """``(fourcc, payload)`` of a WebP's chunks, those before a cut one; the payloads are
+    views of ``data``, not copies."""
+    chunks, position, whole = [], 12, memoryview(data)
     end = min(len(data), 8 + int.from_bytes(data[4:8], "little"))
     while position + 8 <= end:
         size = int.from_bytes(data[position + 4:position + 8], "little")
         if position + 8 + size > end:
             break
-        chunks.append((data[position:position + 4], data[position + 8:position + 8 + size]))
+        chunks.append((data[position:position + 4], whole[position + 8:position + 8 + size]))
         position += 8 + size + (size & 1)
     return chunks
 
@@ -144,8 +145,8 @@ def exif_block(data: bytes) -> bytes | None:
                 return data[start + 8:end - 4]
         return None
     if data[:4] == b"RIFF" and data[8:12] == b"WEBP":
-        return next((payload for fourcc, payload in _riff_chunks(data) if fourcc == b"EXIF"),
-                    None)
+        return next((bytes(payload) for fourcc, payload in _riff_chunks(data)
+                     if fourcc == b"EXIF"), None)
     if data[:4] in (b"II*\x00", b"MM\x00*"):
         return data
     return None
@@ -253,15 +254,19 @@ def _jpeg_segment(code: int, payload: bytes, what: str) -> bytes:
     return bytes((0xFF, code)) + struct.pack(">H", len(payload) + 2) + payload
 
 
-def _with_jpeg(jpeg: bytes, exif: bytes | None, xmp: bytes | None) -> bytes:
+def jpeg_segments(size: tuple[int, int], photo: PhotoExif | None,
+                  record: Mapping[str, str] | None) -> bytes:
+    """The APP1 segments of a JPEG of ``size`` that carry ``photo``'s EXIF
+    (:func:`exif_bytes`) and ``record`` (:func:`xmp_packet`), to go after its JFIF header
+    (:func:`~gsrwt_cli.io.jpeg_stream.with_segments`, which an encoder's caller may use to
+    insert them with other segments at once); raises as :func:`with_metadata` does."""
     segments = b""
-    if exif is not None:
-        segments += _jpeg_segment(0xE1, exif, "the EXIF")
-    if xmp is not None:
-        segments += _jpeg_segment(0xE1, XMP_JPEG_PREFIX + xmp, "the XMP packet")
-    if not header_segments(jpeg):
-        raise MetadataError("the encoder's JPEG has no header to add to")
-    return with_segments(jpeg, segments)
+    if photo is not None:
+        segments += _jpeg_segment(0xE1, exif_bytes(photo, size), "the EXIF")
+    if record:
+        segments += _jpeg_segment(0xE1, XMP_JPEG_PREFIX + xmp_packet(record),
+                                  "the XMP packet")
+    return segments
 
 
 def _png_chunk(kind: bytes, payload: bytes) -> bytes:
@@ -278,15 +283,15 @@ def _with_png(png: bytes, exif: bytes | None, xmp: bytes | None) -> bytes:
         added += _png_chunk(b"eXIf", exif[len(EXIF_PREFIX):])
     if xmp is not None:  # uncompressed iTXt, no language, no translated keyword
         added += _png_chunk(b"iTXt", XMP_PNG_KEYWORD + b"\x00\x00\x00\x00\x00" + xmp)
-    at = chunks[0][2]
-    return png[:at] + added + png[at:]
+    at, whole = chunks[0][2], memoryview(png)
+    return b"".join((whole[:at], added, whole[at:]))  # one copy of the image data
 
 
 _VP8X_ALPHA, _VP8X_EXIF, _VP8X_XMP = 0x10, 0x08, 0x04
 
 
-def _riff_chunk(fourcc: bytes, payload: bytes) -> bytes:
-    return fourcc + struct.pack("<I", len(payload)) + payload + b"\x00" * (len(payload) & 1)
+def _riff_chunk(fourcc: bytes, payload: bytes | memoryview) -> list[bytes | memoryview]:
+    return [fourcc, struct.pack("<I", len(payload)), payload, b"\x00" * (len(payload) & 1)]
 
 
 def _with_webp(webp: bytes, exif: bytes | None, xmp: bytes | None,
@@ -301,7 +306,7 @@ def _with_webp(webp: bytes, exif: bytes | None, xmp: bytes | None,
         raise MetadataError("the encoder's WebP has no chunks")
     first, payload = chunks[0]
     if first == b"VP8X":
-        flags, header = payload[0], payload[1:]
+        flags, header = payload[0], bytes(payload[1:])
     elif first in (b"VP8 ", b"VP8L"):
         # A lossless bitstream says whether it uses alpha (bit 28 after its signature byte);
         # a lossy one with alpha is written in the extended format already (ALPH chunk).
@@ -318,13 +323,15 @@ def _with_webp(webp: bytes, exif: bytes | None, xmp: bytes | None,
     if xmp is not None:
         flags |= _VP8X_XMP
     rest = chunks[1:] if first == b"VP8X" else chunks
-    body = _riff_chunk(b"VP8X", bytes((flags,)) + header) + b"".join(
-        _riff_chunk(fourcc, data) for fourcc, data in rest)
+    parts = _riff_chunk(b"VP8X", bytes((flags,)) + header)
+    for fourcc, data in rest:
+        parts += _riff_chunk(fourcc, data)
     if exif is not None:
-        body += _riff_chunk(b"EXIF", exif[len(EXIF_PREFIX):])
+        parts += _riff_chunk(b"EXIF", exif[len(EXIF_PREFIX):])
     if xmp is not None:
-        body += _riff_chunk(b"XMP ", xmp)
-    return b"RIFF" + struct.pack("<I", 4 + len(body)) + b"WEBP" + body
+        parts += _riff_chunk(b"XMP ", xmp)
+    size = 4 + sum(len(part) for part in parts)
+    return b"".join([b"RIFF", struct.pack("<I", size), b"WEBP", *parts])  # one copy
 
 
 def _with_tiff(tiff: bytes, photo: PhotoExif | None, xmp: bytes | None,
@@ -380,9 +387,10 @@ def _with_tiff(tiff: bytes, photo: PhotoExif | None, xmp: bytes | None,
     merged = {**own, **entries}
     new_ifd = (struct.pack(order + "H", len(merged))
                + b"".join(merged[tag] for tag in sorted(merged)) + b"\x00\x00\x00\x00")
-    body = tiff + b"\x00" * (len(tiff) & 1) + block
-    body += b"\x00" * (len(body) & 1)
-    return tiff[:4] + struct.pack(order + "I", len(body)) + body[8:] + new_ifd
+    pad = b"\x00" * ((start + len(block)) & 1)
+    at = start + len(block) + len(pad)  # the new IFD0, word-aligned
+    return b"".join((tiff[:4], struct.pack(order + "I", at), memoryview(tiff)[8:],
+                     b"\x00" * (start - len(tiff)), block, pad, new_ifd))  # one copy
 
 
 def with_metadata(encoded: bytes, extension: str, size: tuple[int, int],
@@ -396,12 +404,14 @@ def with_metadata(encoded: bytes, extension: str, size: tuple[int, int],
     an encoder's file of an unexpected shape)."""
     if photo is None and not record:
         return encoded
+    if extension == ".jpg":
+        if not header_segments(encoded):
+            raise MetadataError("the encoder's JPEG has no header to add to")
+        return with_segments(encoded, jpeg_segments(size, photo, record))
     xmp = xmp_packet(record) if record else None
     if extension == ".tif":
         return _with_tiff(encoded, photo, xmp, size)
     exif = exif_bytes(photo, size) if photo is not None else None
-    if extension == ".jpg":
-        return _with_jpeg(encoded, exif, xmp)
     if extension == ".png":
         return _with_png(encoded, exif, xmp)
     if extension == ".webp":
