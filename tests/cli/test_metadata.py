@@ -172,8 +172,20 @@ def test_a_rerun_that_strips_does_not_keep_outputs_made_with_metadata(tmp_path: 
     assert row["status"] == "error" and "metadata none -> strip" in row["error"]
 
 
-def test_the_input_s_exif_is_read_from_the_bytes_decoded() -> None:
-    """The test photos' EXIF blocks are where gsrwt looks for them (a JPEG's APP1)."""
-    data = io.BytesIO()
-    Image.new("RGB", (8, 8)).save(data, "JPEG", exif=camera_exif())
-    assert b"Exif\x00\x00" in data.getvalue()[:64]
+def test_a_jpeg_keeps_its_colour_profile_beside_its_exif(tmp_path: Path) -> None:
+    """A phone's JPEG has both: the output's header has the EXIF, the XMP and the profile,
+    each as Pillow and exifread read them."""
+    from PIL import ImageCms
+
+    profile = ImageCms.ImageCmsProfile(ImageCms.createProfile("sRGB")).tobytes()
+    photo = tmp_path / "phone.jpg"
+    Image.fromarray(UPRIGHT[..., ::-1].copy()).save(photo, quality=95, icc_profile=profile,
+                                                    exif=camera_exif(orientation=3))
+    result = run_gsrwt("rectify", photo, "-o", tmp_path / "out", *POSE, "-q")
+    assert result.returncode == 0, result.stderr
+    data = (tmp_path / "out" / "phone.jpg").read_bytes()
+    with Image.open(io.BytesIO(data)) as rectified:
+        assert rectified.info.get("icc_profile") == profile
+    tags = exif_tags(data)
+    assert {tag: tags.get(tag) for tag in EXPECTED} == EXPECTED
+    assert gsrwt_record(xmp_of(data))["Orientation"] == "3"
