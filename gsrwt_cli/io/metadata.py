@@ -156,7 +156,9 @@ def photo_exif(data: bytes) -> PhotoExif | None:
     """The cleaned EXIF (:class:`PhotoExif`) of an image file's bytes (:func:`exif_block`),
     or None when it has none, or nothing but an orientation. Raises :class:`DamagedExifError`
     for a block Pillow cannot parse; tags Pillow skips as damaged (it warns) are left out.
-    Header only: about 0.4 ms for a camera's EXIF (Pillow's writer, at the output, 0.9)."""
+    The header only: 0.5-1.6 ms for a camera's EXIF, and Pillow's writer about 1 ms at the
+    output; a 12 MP JPEG rectified with and without metadata took 510 and 506 ms (medians of
+    12, one process, on a busy 2-core machine)."""
     block = exif_block(data)
     if block is None:
         return None
