@@ -29,6 +29,8 @@ from ..geometry.framing import Plan
 from ..geometry.orientation import displayed_size
 from ..imaging.images import (
     Scratch,
+    Working,
+    canonical_extension,
     check_writable,
     file_orientation,
     image_file_size,
@@ -52,7 +54,7 @@ from ..tables.rows import params_row, plan_row
 from .executor import Executor, ProcessExecutor
 from .in_order import run_in_order
 from .job_errors import JobError, error_text
-from .reruns import differences, is_regular_file, made_with, record_of
+from .reruns import differences, is_regular_file, lens_word, made_with, record_of
 from .settings import Describe, Settings  # noqa: F401  (named here too)
 from .workers import ProcessWorker
 
@@ -240,6 +242,73 @@ def _plan(view: View, width: int, height: int, settings: Settings) -> Plan:
     return plan_image(view, width, height, settings.framing)
 
 
+def metadata_record(info: Plan, orientation: int | None, input_size: tuple[int, int]
+                    ) -> dict[str, str]:
+    """What gsrwt did to an image, as the XMP properties of its output
+    (:func:`~gsrwt_cli.io.metadata.xmp_packet`; docs/COMMANDS.md): the version, the pose, the
+    camera (focal lengths and principal point in pixels of the displayed photo, the lens
+    undone), the EXIF orientation applied, the sizes, and the homography (row-major, output
+    pixel <- input pixel, after the lens; as the table's ``homography``)."""
+    from .. import __version__
+
+    view = info.view
+    intrinsics = view.intrinsics
+    number = "{:.12g}".format
+    return {
+        "Version": __version__,
+        "Pan": number(view.pan), "Tilt": number(view.tilt), "Roll": number(view.roll),
+        "Fx": number(intrinsics.fx), "Fy": number(intrinsics.fy),
+        "Cx": number(intrinsics.cx), "Cy": number(intrinsics.cy),
+        "Lens": lens_word(intrinsics.lens),
+        "Orientation": _orientation_cell(orientation),
+        "InputSize": "{}x{}".format(*input_size), "OutputSize": "{}x{}".format(*info.size),
+        "Homography": plan_row(info)["homography"],
+    }
+
+
+def _encoded(warped: Working, job: Job, settings: Settings, scratch: Scratch, info: Plan,
+             orientation: int | None, input_size: tuple[int, int]) -> tuple[bytes, str]:
+    """The output's bytes (:meth:`~gsrwt_cli.imaging.images.Scratch.encode`) with the input's
+    EXIF and gsrwt's record (:func:`~gsrwt_cli.io.metadata.with_metadata`; a JPEG's put into
+    its header with its colour profile, in one insertion), and the row's ``metadata`` cell;
+    without them when the input has none, its EXIF is damaged, or the output cannot hold
+    it."""
+    from ..io.metadata import (
+        METADATA_FORMATS,
+        DamagedExifError,
+        MetadataError,
+        jpeg_segments,
+        with_metadata,
+    )
+
+    suffix, quality = job.output.suffix, settings.quality
+    extension = canonical_extension(suffix)
+    encoded = None
+    if not settings.metadata:
+        status = "stripped"
+    elif scratch.exif_problem is not None:
+        status = "damaged"
+    elif scratch.exif is None:
+        status = "none"
+    elif extension not in METADATA_FORMATS:
+        status = "unsupported"
+    else:
+        record = metadata_record(info, orientation, input_size)
+        try:
+            if extension == ".jpg":
+                segments = jpeg_segments(info.size, scratch.exif, record)
+                return scratch.encode(warped, suffix, quality, segments), "kept"
+            encoded = scratch.encode(warped, suffix, quality)
+            return with_metadata(encoded, extension, info.size, scratch.exif, record), "kept"
+        except DamagedExifError:
+            status = "damaged"
+        except MetadataError:  # too large for the format
+            status = "unsupported"
+    if encoded is None:
+        encoded = scratch.encode(warped, suffix, quality)
+    return encoded, status
+
+
 def process_job(job: Job, settings: Settings, scratch: Scratch | None = None) -> dict[str, Any]:
     """Rectify one image and return its table row; never raises for a bad image.
 
@@ -277,7 +346,7 @@ def process_job(job: Job, settings: Settings, scratch: Scratch | None = None) ->
             # reduced in the DCT (Scratch.read); at scale 1 and above, never.
             preview = info.pixel_map if settings.antialias and info.frame.scale < 1 else None
             image = scratch.read(job.source, settings.max_input_pixels, orientation or 1,
-                                 preview)
+                                 preview, exif=settings.metadata)
             dtype, channels = image.dtype, 1 if image.ndim == 2 else image.shape[2]
             del image  # the scratch holds it for the warp
             check_writable(
@@ -289,7 +358,8 @@ def process_job(job: Job, settings: Settings, scratch: Scratch | None = None) ->
                     info.pixel_map, settings.interpolation, settings.fill, settings.alpha,
                     settings.antialias,
                 )
-                encoded = scratch.encode(warped, job.output.suffix, settings.quality)
+                encoded, row["metadata"] = _encoded(warped, job, settings, scratch, info,
+                                                    orientation, (width, height))
                 del warped
                 if checking:
                     with open_input(job.output) as handle:

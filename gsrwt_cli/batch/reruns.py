@@ -83,7 +83,9 @@ def _given(value: Any) -> str:
     return shorten(percent_encoded(text, safe=""), 200)
 
 
-def _lens_word(lens: Lens | None) -> str:
+def lens_word(lens: Lens | None) -> str:
+    """A lens as one word: ``none``, or its model and non-zero coefficients
+    (``plumb_bob(k1:-0.2,p1:0.001)``)."""
     if lens is None or lens.is_identity:
         return "none"
     terms = ",".join(f"{name}:{_number(value)}" for name, value in lens.coefficients if value)
@@ -101,7 +103,7 @@ def _camera_words(path: str) -> list[tuple[str, str]]:
     words = [(f"camera.{name}", "none" if value is None else _number(value)) for name, value in
              (("fx", camera.fx), ("fy", camera.fy), ("cx", camera.cx), ("cy", camera.cy),
               ("skew", camera.skew), ("width", camera.width), ("height", camera.height))]
-    return [*words, ("camera.lens", _lens_word(camera.lens))]
+    return [*words, ("camera.lens", lens_word(camera.lens))]
 
 
 def made_with(values: Mapping[str, Any] | None, wall: str | None, settings: Settings,
@@ -143,6 +145,8 @@ def made_with(values: Mapping[str, Any] | None, wall: str | None, settings: Sett
               ("fill", _number(settings.fill)), ("alpha", "on" if settings.alpha else "off")]
     if settings.orientation != "exif":  # the default left out: tables made before it hold
         words.append(("orientation", settings.orientation))
+    if not settings.metadata:  # likewise
+        words.append(("metadata", "strip"))
     if suffix.lower() in LOSSY:
         words.append(("quality", str(settings.quality)))
     return " ".join(f"{name}={value}" for name, value in words)

@@ -29,6 +29,9 @@ class Settings:
     antialias: bool = True
     #: ``exif``: the photo as its EXIF orientation displays it; ``ignore``: the stored pixels.
     orientation: str = "exif"
+    #: Carry the input's EXIF to the output, with gsrwt's record in XMP (``--strip-metadata``:
+    #: False, nothing but the pixels, and a JPEG's colour profile).
+    metadata: bool = True
     root: Path | Location | None = None  # the output directory: nothing is written outside it
     #: Words an error in the caller's terms (a picklable callable: it goes to workers).
     describe: Describe | None = None

@@ -515,6 +515,10 @@ def dask_executor(address: str, processes: int, retries: int,
 @click.option("--ext", default=None,
               help="Write this format (jpg, png, tif, webp, bmp) [default: the input's].")
 @quality_option
+@click.option("--strip-metadata", is_flag=True,
+              help="Write the pixels only: without the input's EXIF (camera, lens, date, "
+                   "GPS, exposure) and gsrwt's record in XMP, which JPEG, PNG, WebP and TIFF "
+                   "outputs otherwise carry (the table's 'metadata' says).")
 @click.option("--table", "table_path", default=None,
               help="Where to write the table (.csv, .tsv, .json, .jsonl; - for stdout) "
                    "[default: OUTDIR/gsrwt.csv].")
@@ -649,6 +653,7 @@ def settings_from_options(outdir: Path | Location, options: dict[str, Any]
                                 px_per_unit is not None, size_limit is not None),
         antialias=options.pop("antialias"),
         orientation=options.pop("exif_orientation"),
+        metadata=not options.pop("strip_metadata"),
     )
     return settings, extension
 

@@ -18,7 +18,7 @@ import threading
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
-from typing import IO
+from typing import IO, TYPE_CHECKING
 
 import cv2
 import imagesize
@@ -28,6 +28,9 @@ from ..base.messages import one_line
 from ..geometry.orientation import ORIENTATION_TAG, orientation_steps, valid_orientation
 from ..geometry.pixelmap import PixelMap
 from ..io.storage import open_input
+
+if TYPE_CHECKING:
+    from ..io.metadata import PhotoExif
 
 #: File types gsrwt looks for in directories (OpenCV reads them all).
 IMAGE_EXTENSIONS = (".jpg", ".jpeg", ".jpe", ".png", ".tif", ".tiff", ".bmp", ".webp")
@@ -575,6 +578,11 @@ class Scratch:
         self._padded = False  # the decoded image is a JPEG's BGRA, fourth channel opaque
         self._icc = b""  # the JPEG's ICC profile segments, if they describe it, for its output
         self._reduced: tuple[int, tuple[float, float]] = (1, (0.0, 0.0))  # see :meth:`read`
+        #: The EXIF of the image :meth:`read` read last, cleaned for its output, when asked
+        #: for (:func:`~gsrwt_cli.io.metadata.photo_exif`); None if it has none.
+        self.exif: PhotoExif | None = None
+        #: Why that EXIF could not be read (a damaged block), else None.
+        self.exif_problem: str | None = None
 
     def array(self, region: int, shape: tuple[int, ...], dtype: np.dtype) -> np.ndarray:
         """An uninitialized array of ``shape`` and ``dtype`` in ``region`` (0 or 1)."""
@@ -592,9 +600,12 @@ class Scratch:
         return self._reduced[0]
 
     def read(self, path: str | Path, max_pixels: float = DEFAULT_MAX_INPUT_PIXELS,
-             orientation: int = 1, preview: PixelMap | None = None) -> np.ndarray:
+             orientation: int = 1, preview: PixelMap | None = None, exif: bool = False
+             ) -> np.ndarray:
         """Decode an image (:func:`read_image`) for :meth:`warp`, and return it, as its EXIF
-        ``orientation`` displays it (:func:`displayed_pixels`; 1: as stored).
+        ``orientation`` displays it (:func:`displayed_pixels`; 1: as stored). ``exif``: also
+        keep its EXIF for its output (:attr:`exif`, :attr:`exif_problem`), from the bytes
+        read for decoding (no read of its own).
 
         ``preview``: the map the image will be warped by, given when the output may be made
         from a reduced input (an output smaller than the input, antialiased): a JPEG is then
@@ -611,9 +622,16 @@ class Scratch:
             icc_segments,
             jpeg_components,
         )
+        from ..io.metadata import MetadataError, photo_exif
 
         self._decoded, self._padded, self._reduced = None, False, (1, (0.0, 0.0))
+        self.exif, self.exif_problem = None, None
         data = read_file_bytes(path)
+        if exif:
+            try:
+                self.exif = photo_exif(data)
+            except MetadataError as error:
+                self.exif_problem = str(error)
         self._icc = icc_segments(data)
         if icc_colour_space(self._icc) != ICC_COLOUR_SPACES.get(jpeg_components(data)):
             self._icc = b""  # a profile that does not describe its own JPEG describes nothing
@@ -674,20 +692,24 @@ class Scratch:
         out = self.array(0, out_shape, source.pixels.dtype)
         return warp_working(source, pixel_map, interpolation, fill, alpha, out, antialias)
 
-    def encode(self, warped: Working, extension: str, quality: int = 95) -> bytes:
+    def encode(self, warped: Working, extension: str, quality: int = 95,
+               segments: bytes = b"") -> bytes:
         """:func:`encode_image` of what :meth:`warp` gave; a JPEG made from a JPEG keeps its
         colour profile (the input's ICC segments, as they were) where its colour model is
         kept: the profile's colour space is the input's and the output's (grey in, grey out;
-        RGB in, RGB out). A CMYK JPEG, decoded to BGR, loses its CMYK profile."""
+        RGB in, RGB out). A CMYK JPEG, decoded to BGR, loses its CMYK profile. ``segments``:
+        more marker segments for a JPEG's header (its EXIF and XMP), put before the profile
+        in the same insertion (one copy of the encoded image, not two)."""
         from ..io.jpeg_stream import ICC_COLOUR_SPACES, icc_colour_space, with_segments
 
         encoded = encode_image(warped, extension, quality)
+        if canonical_extension(extension) != ".jpg":
+            return encoded
         channels = 3 if warped.padded else 1 if warped.pixels.ndim == 2 else (
             warped.pixels.shape[2])
-        if (canonical_extension(extension) == ".jpg" and self._icc
-                and icc_colour_space(self._icc) == ICC_COLOUR_SPACES.get(channels)):
-            encoded = with_segments(encoded, self._icc)
-        return encoded
+        if self._icc and icc_colour_space(self._icc) == ICC_COLOUR_SPACES.get(channels):
+            segments += self._icc
+        return with_segments(encoded, segments)
 
 
 def _reduced_offset(orientation: int, stored_size: tuple[int, int], reduction: int

@@ -77,7 +77,7 @@ _ICC_SIGNATURE = b"ICC_PROFILE\x00"
 _APP0, _APP2 = 0xE0, 0xE2
 
 
-def _header_segments(data: bytes) -> list[tuple[int, int, int]]:
+def header_segments(data: bytes) -> list[tuple[int, int, int]]:
     """``(code, start, end)`` of each marker segment before the first scan (``start`` at its
     ``FF``); empty for data that is not a JPEG or whose header is cut short."""
     if data[:2] != b"\xff\xd8":
@@ -102,7 +102,7 @@ def _header_segments(data: bytes) -> list[tuple[int, int, int]]:
 def icc_segments(data: bytes) -> bytes:
     """The APP2 ``ICC_PROFILE`` segments of a JPEG's header, whole and in order (a profile
     over 64 KB is split over several: ICC.1 Annex B.4); empty if it has none."""
-    return b"".join(data[start:end] for code, start, end in _header_segments(data)
+    return b"".join(data[start:end] for code, start, end in header_segments(data)
                     if code == _APP2 and data[start + 4:start + 4 + len(_ICC_SIGNATURE)]
                     == _ICC_SIGNATURE)
 
@@ -118,7 +118,7 @@ _SOF = frozenset({*range(0xC0, 0xC4), *range(0xC5, 0xC8), *range(0xC9, 0xCC),
 def jpeg_components(data: bytes) -> int | None:
     """How many colour components a JPEG's frame has (1 grey, 3 YCbCr or RGB, 4 CMYK or
     YCCK), from its first start-of-frame segment; None if there is none before the scan."""
-    for code, start, end in _header_segments(data):
+    for code, start, end in header_segments(data):
         if code in _SOF and end >= start + 10:
             return data[start + 9]
     return None
@@ -143,6 +143,7 @@ def with_segments(jpeg: bytes, segments: bytes) -> bytes:
     segment, which must come first, or else right after its start-of-image marker."""
     if not segments:
         return jpeg
-    header = _header_segments(jpeg)
+    header = header_segments(jpeg)
     at = header[0][2] if header and header[0][0] == _APP0 else 2
-    return jpeg[:at] + segments + jpeg[at:]
+    whole = memoryview(jpeg)
+    return b"".join((whole[:at], segments, whole[at:]))  # one copy of the image data

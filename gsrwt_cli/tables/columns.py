@@ -17,7 +17,7 @@ PARAMS_COLUMNS = (
 #: geometry, what made it, and how it went.
 RECTIFY_COLUMNS = (
     *PARAMS_COLUMNS, "focal_source", "pose_source", "confidence", "aspect", "aspect_source",
-    "orientation", "output",
+    "orientation", "metadata", "output",
     "out_width", "out_height", "scale", "homography", "made_with", "status", "error",
 )
 
@@ -29,6 +29,12 @@ RECTIFY_STATUSES = ("ok", "skipped", "error", "interrupted", "planned")
 #: A rectify row's ``orientation``: the EXIF orientation applied (1-8, 1 also for a photo
 #: without one), or ``ignored`` (``--orientation ignore``: the stored pixels).
 ORIENTATION_VALUES = ("1", "2", "3", "4", "5", "6", "7", "8", "ignored")
+#: A rectify row's ``metadata``: what its output carries of the input's (docs/TABLES.md).
+#: ``kept``: the input's EXIF and gsrwt's record (XMP); ``none``: the input had no EXIF, so
+#: neither; ``stripped``: ``--strip-metadata``; ``damaged``: the input's EXIF could not be
+#: read, so neither; ``unsupported``: the output's format holds none (BMP), or not this
+#: much (a JPEG's 64 KB segment), so neither.
+METADATA_VALUES = ("kept", "none", "stripped", "damaged", "unsupported")
 
 #: The vanishing points ``gsrwt estimate`` reports, in the estimator's order (its
 #: ``DIRECTION_NAMES``).
