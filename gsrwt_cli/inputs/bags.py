@@ -577,21 +577,21 @@ def _tf_samples(
     topics = {topic} | ({static_topic} if static_topic else set())
     connections = [c for c in reader.connections
                    if c.topic in topics and c.msgtype == TF_MESSAGE]
-    static: dict[tuple[str, str], tuple[int, Matrix]] = {}
-    moving: dict[tuple[str, str], dict[int, Matrix]] = {}
+    # Each edge's quaternions as read, with where they were (a rotation is made only for the
+    # edges of the chain: a bad quaternion elsewhere in the tree is none of gsrwt's business).
+    static: dict[tuple[str, str], tuple[int, Any, str]] = {}
+    moving: dict[tuple[str, str], dict[int, tuple[Any, str]]] = {}
     for index, (connection, log_ns, raw) in enumerate(reader.messages(connections)):
         message = reader.deserialize(raw, connection.msgtype)
         for transform in message.transforms:
             edge = (_frame_name(str(transform.header.frame_id)),
                     _frame_name(str(transform.child_frame_id)))
-            where = (f"{name}: {quote(connection.topic)} message {index}, transform "
-                     f"{quote(edge[0], 60)} -> {quote(edge[1], 60)}")
-            rotation = _quaternion_rotation(transform.transform.rotation, where)
+            where = f"{quote(connection.topic)} message {index}"
             stamp = _stamp_ns(transform, log_ns)
             if connection.topic == static_topic:
-                static[edge] = (stamp, rotation)
+                static[edge] = (stamp, transform.transform.rotation, where)
             else:
-                moving.setdefault(edge, {})[stamp] = rotation
+                moving.setdefault(edge, {})[stamp] = (transform.transform.rotation, where)
     path = _frame_path(set(static) | set(moving), wall, camera)
     if path is None:
         frames = sorted({f for edge in set(static) | set(moving) for f in edge})
@@ -617,11 +617,18 @@ def _tf_samples(
     else:
         stamps = [max(static[edge][0] for edge, _, _ in steps)]
         constant = True
+    def rotation(edge: tuple[str, str], q: Any, where: str) -> Matrix:
+        return _quaternion_rotation(q, f"{name}: {where}, transform "
+                                       f"{quote(edge[0], 60)} -> {quote(edge[1], 60)}")
+
+    fixed = {edge: rotation(edge, *static[edge][1:]) for edge, _, is_moving in steps
+             if not is_moving}
     rotations = []
     for stamp in stamps:
         wall_from_camera = np.eye(3)
         for edge, forward, is_moving in steps:
-            parent_from_child = moving[edge][stamp] if is_moving else static[edge][1]
+            parent_from_child = (rotation(edge, *moving[edge][stamp]) if is_moving
+                                 else fixed[edge])
             wall_from_camera = wall_from_camera @ (parent_from_child if forward
                                                    else parent_from_child.T)
         try:

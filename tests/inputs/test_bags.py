@@ -391,6 +391,25 @@ def test_tf_chain_that_does_not_connect(scene):
         pose_samples(scene, "/tf", wall_frame="wall")
 
 
+def test_poses_out_of_order_come_sorted_and_a_bad_quaternion_is_refused(tmp_path):
+    path = bag_path(tmp_path, "mcap")
+    order = [2, 0, 4, 1, 3]
+    with bag_builder(path, "mcap") as bag:
+        for i in order:
+            sample = SWEEP[i]
+            q = ros_quaternion(wall_from_optical(sample.pan, sample.tilt, sample.roll))
+            bag.add("/pose", "geometry_msgs/msg/QuaternionStamped", SWEEP[0].stamp_ns,
+                    bag.types["geometry_msgs/msg/QuaternionStamped"](
+                        header=bag.header(sample.stamp_ns, "wall"), quaternion=bag.quaternion(q)))
+            bag.add("/bad", "geometry_msgs/msg/QuaternionStamped", SWEEP[0].stamp_ns,
+                    bag.types["geometry_msgs/msg/QuaternionStamped"](
+                        header=bag.header(sample.stamp_ns, "wall"),
+                        quaternion=bag.quaternion((0.0, 0.0, 0.0, 2.0 if i == 4 else 1.0))))
+    _assert_sweep(pose_samples(path, "/pose"))
+    with pytest.raises(BagError, match="'/bad' message 2: the quaternion .* is not a unit"):
+        pose_samples(path, "/bad")
+
+
 def test_a_pose_topic_of_another_type(scene):
     with pytest.raises(BagError, match="holds sensor_msgs/msg/Image, not a pose topic"):
         pose_samples(scene, "/camera/image_raw")
@@ -450,3 +469,29 @@ def test_write_bag_never_overwrites_and_leaves_nothing_when_it_fails(tmp_path):
     with pytest.raises(BagError, match="frame 1: cannot write an image of shape"):
         write_bag(failing, "/image", bad, camera)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out.bag"]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("kind", KINDS)
+def test_frames_are_read_in_bounded_memory(tmp_path, kind):
+    """40 frames of 640x480 BGR (37 MB): reading them all holds about the reader's chunks
+    and a few frames (measured: peaks of 7-9 MB, whatever the bag's length)."""
+    import tracemalloc
+
+    path = bag_path(tmp_path, kind)
+    image = np.random.default_rng(1).integers(0, 256, (480, 640, 3), dtype=np.uint8)
+    count = 40
+    with bag_builder(path, kind) as bag:
+        for i in range(count):
+            stamp = SWEEP[0].stamp_ns + i * 33_000_000
+            bag.add("/camera/image_raw", "sensor_msgs/msg/Image", stamp,
+                    bag.image(stamp, image, "bgr8"))
+    tracemalloc.start()
+    try:
+        read = sum(1 for frame in image_frames(path, "/camera/image_raw")
+                   if np.array_equal(frame.pixels(), image))
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert read == count
+    assert peak < 14 * image.nbytes, f"peak {peak / 1e6:.1f} MB"
