@@ -199,8 +199,19 @@ def _open(bag: str | Path) -> Iterator[Any]:
     if not path.exists():
         raise BagError(f"{name}: no such file or directory")
     try:
-        reader = highlevel.AnyReader([path])
-        reader.open()
+        try:
+            reader = highlevel.AnyReader([path])
+            reader.open()
+        except highlevel.AnyReaderError as error:
+            if "no type definitions" not in str(error):
+                raise
+            # A ROS 2 bag without message definitions (sqlite3 bags of Foxy to Humble): the
+            # messages read are the same in every ROS 2 distribution.
+            from rosbags.typesys import Stores, get_typestore
+
+            reader = highlevel.AnyReader(
+                [path], default_typestore=get_typestore(Stores.ROS2_HUMBLE))
+            reader.open()
     except Exception as error:  # rosbags raises its own errors, OSError, KeyError on bad data
         reason = one_line(str(error), 300) or type(error).__name__
         raise BagError(f"{name}: not a ROS bag rosbags can read ({reason})") from None

@@ -245,6 +245,25 @@ def test_a_raw_image_shorter_than_its_size_is_a_frame_error(tmp_path):
     assert np.array_equal(frames[2].pixels(), colour[2])
 
 
+def test_a_ros2_bag_without_message_definitions(tmp_path):
+    """sqlite3 bags recorded by Foxy to Humble hold no message definitions; the standard
+    messages are read all the same."""
+    import sqlite3
+
+    path = bag_path(tmp_path, "sqlite3")
+    colour = rendered_frames(3)
+    with bag_builder(path, "sqlite3") as bag:
+        for sample, image in zip(SWEEP, colour):
+            bag.add("/camera/image_raw", "sensor_msgs/msg/Image", sample.stamp_ns,
+                    bag.image(sample.stamp_ns, image, "bgr8"))
+    (database,) = path.glob("*.db3")
+    with sqlite3.connect(database) as connection:
+        connection.execute("DELETE FROM message_definitions")
+    frames = list(image_frames(path, "/camera/image_raw"))
+    assert len(frames) == len(SWEEP)
+    assert all(np.array_equal(f.pixels(), image) for f, image in zip(frames, colour))
+
+
 def test_not_a_bag(tmp_path):
     path = tmp_path / "walk.bag"
     path.write_bytes(b"#ROSBAG V2.0\n" + b"\x00" * 10)
