@@ -75,8 +75,10 @@ QUATERNION_STAMPED = "geometry_msgs/msg/QuaternionStamped"
 IMU = "sensor_msgs/msg/Imu"
 JOINT_STATE = "sensor_msgs/msg/JointState"
 TF_MESSAGE = "tf2_msgs/msg/TFMessage"
+#: ROS 1's older tf message (``tf/tfMessage``), the same fields.
+TF_MESSAGES = (TF_MESSAGE, "tf/msg/tfMessage")
 #: The message types :func:`pose_samples` reads.
-POSE_TYPES = (POSE_STAMPED, QUATERNION_STAMPED, IMU, JOINT_STATE, TF_MESSAGE)
+POSE_TYPES = (POSE_STAMPED, QUATERNION_STAMPED, IMU, JOINT_STATE, *TF_MESSAGES)
 
 #: Raw ``sensor_msgs/Image`` encodings read: (sample type, channels, OpenCV conversion to
 #: BGR/BGRA or None). ``8UC3``/``8UC4``/``16UC3``/``16UC4`` carry no colour order; they are
@@ -471,7 +473,8 @@ def pose_samples(
       the wall squarely); ``joint_signs`` (each +1 or -1, default ``(1, 1)``) multiplies them
       for a unit whose signs differ. Roll is 0. Messages that name neither joint (other
       joint groups on the same topic) are skipped; one that names only one is refused.
-    - ``tf2_msgs/TFMessage`` (``/tf``; the ``/tf_static`` beside it is read too): the
+    - ``tf2_msgs/TFMessage`` or ROS 1's ``tf/tfMessage`` (``/tf``; the ``/tf_static``
+      beside it is read too): the
       rotation of ``camera_frame`` (the optical frame) in ``wall_frame``, composed through
       any intermediate frames (up or down the tree). The samples are the stamps of the
       chain's moving (``/tf``) transforms; with several, the stamps they share (as one
@@ -484,7 +487,7 @@ def pose_samples(
     with _open(bag) as reader:
         connections = _connections(reader, bag, pose_topic, POSE_TYPES, "a pose topic")
         kind = connections[0].msgtype
-        if kind == TF_MESSAGE:
+        if kind in TF_MESSAGES:
             stamps, rotations, constant = _tf_samples(reader, name, pose_topic, wall_frame,
                                                       camera_frame)
         else:
@@ -587,7 +590,7 @@ def _tf_samples(
     static_topic = topic + "_static" if topic.endswith("tf") else None
     topics = {topic} | ({static_topic} if static_topic else set())
     connections = [c for c in reader.connections
-                   if c.topic in topics and c.msgtype == TF_MESSAGE]
+                   if c.topic in topics and c.msgtype in TF_MESSAGES]
     # Each edge's quaternions as read, with where they were (a rotation is made only for the
     # edges of the chain: a bad quaternion elsewhere in the tree is none of gsrwt's business).
     static: dict[tuple[str, str], tuple[int, Any, str]] = {}

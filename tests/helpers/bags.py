@@ -115,11 +115,12 @@ class BagBuilder:
         self.kind = kind
         self.ros1 = kind == "ros1"
         self.typestore = get_typestore(Stores.ROS1_NOETIC if self.ros1 else Stores.ROS2_HUMBLE)
-        if "tf2_msgs/msg/TFMessage" not in self.typestore.types:  # rosbags' noetic store
+        if self.ros1:  # rosbags' noetic store has neither tf message
             from rosbags.typesys import get_types_from_msg
 
-            self.typestore.register(get_types_from_msg(
-                "geometry_msgs/TransformStamped[] transforms", "tf2_msgs/msg/TFMessage"))
+            for name in ("tf2_msgs/msg/TFMessage", "tf/msg/tfMessage"):
+                self.typestore.register(get_types_from_msg(
+                    "geometry_msgs/TransformStamped[] transforms", name))
         self.types = self.typestore.types
         if self.ros1:
             from rosbags.rosbag1 import Writer
@@ -189,8 +190,8 @@ class BagBuilder:
         return types["geometry_msgs/msg/TransformStamped"](
             header=self.header(stamp_ns, parent), child_frame_id=child, transform=transform)
 
-    def tf(self, transforms: list[Any]) -> Any:
-        return self.types["tf2_msgs/msg/TFMessage"](transforms=transforms)
+    def tf(self, transforms: list[Any], msgtype: str = "tf2_msgs/msg/TFMessage") -> Any:
+        return self.types[msgtype](transforms=transforms)
 
     def joint_state(self, stamp_ns: int, names: list[str], positions: list[float]) -> Any:
         return self.types["sensor_msgs/msg/JointState"](

@@ -393,6 +393,17 @@ def test_tf_chains(scene, wall, camera):
     _assert_sweep(samples)
 
 
+def test_ros1_tf_messages_of_the_old_type(tmp_path):
+    path = bag_path(tmp_path, "ros1")
+    with bag_builder(path, "ros1") as bag:
+        for sample in SWEEP:
+            q = ros_quaternion(wall_from_optical(sample.pan, sample.tilt, sample.roll))
+            bag.add("/tf", "tf/msg/tfMessage", sample.stamp_ns,
+                    bag.tf([bag.transform(sample.stamp_ns, "/wall", "/optical", q)],
+                           "tf/msg/tfMessage"))
+    _assert_sweep(pose_samples(path, "/tf", wall_frame="wall", camera_frame="optical"))
+
+
 def test_tf_of_static_transforms_only_is_constant(scene):
     samples = pose_samples(scene, "/tf", wall_frame="wall", camera_frame="wall_up")
     assert samples.constant and len(samples) == 1
