@@ -24,7 +24,9 @@ differ between topics, so it is only the fallback. Times are integers of nanosec
 Errors
 ------
 :class:`BagError`: one line naming the bag (and the topic) and what is wrong; the bag or
-topic is unusable. :class:`NoCameraInfoError` is the one for a missing ``camera_info``.
+topic is unusable. :class:`NoCameraInfoError` is the one for a missing ``camera_info``,
+:class:`DamagedBagError` the one for data that breaks off after the bag opened (the frames
+before it have been given).
 A frame whose data cannot be decoded (a corrupt ``CompressedImage``, a raw image shorter than
 its size says) does not stop :func:`image_frames`: its :class:`Frame` carries ``error``
 instead of ``image``, and :meth:`Frame.pixels` raises :class:`FrameError` with it.
@@ -119,6 +121,15 @@ class NoCameraInfoError(BagError):
             f"{quote(image_topic)}){others}: name the camera_info topic, or give the camera's "
             "intrinsics instead"
         )
+
+
+class DamagedBagError(BagError):
+    """The bag could be opened but its data is damaged from message ``index`` of the topic
+    on (a torn chunk, overwritten bytes): what came before it was read."""
+
+    def __init__(self, message: str, index: int) -> None:
+        super().__init__(message)
+        self.index = index
 
 
 class FrameError(ValueError):
@@ -216,12 +227,33 @@ def _open(bag: str | Path) -> Iterator[Any]:
             reader.open()
     except Exception as error:  # rosbags raises its own errors, OSError, KeyError on bad data
         reason = one_line(str(error), 300) or type(error).__name__
-        raise BagError(f"{name}: not a ROS bag rosbags can read ({reason})") from None
+        raise BagError(f"{name}: cannot be read as a ROS bag ({reason})") from None
     try:
         yield reader
     finally:
         with contextlib.suppress(Exception):
             reader.close()
+
+
+def _messages(reader: Any, connections: list[Any], bag: str | Path,
+              what: str) -> Iterator[tuple[int, Any, int, bytes]]:
+    """``(index, connection, log_ns, raw)`` of ``connections``' messages in the bag's order;
+    data rosbags cannot read raises :class:`DamagedBagError` (``what``: the topics, for the
+    message), never rosbags' own errors."""
+    messages = reader.messages(connections)
+    index = 0
+    while True:
+        try:
+            connection, log_ns, raw = next(messages)
+        except StopIteration:
+            return
+        except Exception as error:
+            reason = one_line(str(error), 300) or type(error).__name__
+            raise DamagedBagError(
+                f"{one_line(str(bag), 200)}: damaged at message {index} of {what} "
+                f"({reason})", index) from None
+        yield index, connection, log_ns, raw
+        index += 1
 
 
 def _connections(reader: Any, bag: str | Path, topic: str, types: tuple[str, ...],
@@ -238,6 +270,15 @@ def _connections(reader: Any, bag: str | Path, topic: str, types: tuple[str, ...
         raise BagError(f"{name}: topic {quote(topic)} holds {wrong[0]}, not {what} "
                        f"({', '.join(types)})")
     return found
+
+
+def _deserialize(reader: Any, raw: bytes, connection: Any, where: str, index: int) -> Any:
+    """One message, or :class:`DamagedBagError` naming it when its bytes are not one."""
+    try:
+        return reader.deserialize(raw, connection.msgtype)
+    except Exception as error:
+        reason = one_line(str(error), 200) or type(error).__name__
+        raise DamagedBagError(f"{where} message {index} is damaged ({reason})", index) from None
 
 
 def _stamp_ns(message: Any, log_ns: int) -> int:
@@ -291,7 +332,8 @@ def image_frames(bag: str | Path, topic: str) -> Iterator[Frame]:
         connections = _connections(reader, bag, topic, (IMAGE, COMPRESSED_IMAGE),
                                    "an image topic")
         first: int | None = None
-        for index, (connection, log_ns, raw) in enumerate(reader.messages(connections)):
+        for index, connection, log_ns, raw in _messages(reader, connections, bag,
+                                                         quote(topic)):
             try:
                 message = reader.deserialize(raw, connection.msgtype)
             except Exception as error:
@@ -397,8 +439,8 @@ def camera_info(bag: str | Path, image_topic: str,
             raise NoCameraInfoError(str(bag), image_topic, topic, others)
         connections = _connections(reader, bag, topic, (CAMERA_INFO,), "a camera_info topic")
         first: tuple | None = None
-        for index, (connection, _, raw) in enumerate(reader.messages(connections)):
-            message = reader.deserialize(raw, connection.msgtype)
+        for index, connection, _, raw in _messages(reader, connections, bag, quote(topic)):
+            message = _deserialize(reader, raw, connection, f"{name}: {quote(topic)}", index)
             fields = _camera_fields(message)
             if first is None:
                 first = fields
@@ -522,8 +564,8 @@ def _message_samples(
     stamps: list[int] = []
     rotations: list[Matrix] = []
     names_seen: set[str] = set()
-    for index, (connection, log_ns, raw) in enumerate(reader.messages(connections)):
-        message = reader.deserialize(raw, connection.msgtype)
+    for index, connection, log_ns, raw in _messages(reader, connections, name, quote(topic)):
+        message = _deserialize(reader, raw, connection, f"{name}: {quote(topic)}", index)
         where = f"{name}: {quote(topic)} message {index}"
         if kind in (POSE_STAMPED, QUATERNION_STAMPED):
             frame = _frame_name(str(message.header.frame_id))
@@ -595,8 +637,9 @@ def _tf_samples(
     # edges of the chain: a bad quaternion elsewhere in the tree is none of gsrwt's business).
     static: dict[tuple[str, str], tuple[int, Any, str]] = {}
     moving: dict[tuple[str, str], dict[int, tuple[Any, str]]] = {}
-    for index, (connection, log_ns, raw) in enumerate(reader.messages(connections)):
-        message = reader.deserialize(raw, connection.msgtype)
+    what = " and ".join(quote(t) for t in sorted(topics))
+    for index, connection, log_ns, raw in _messages(reader, connections, name, what):
+        message = _deserialize(reader, raw, connection, f"{name}: {what}", index)
         for transform in message.transforms:
             edge = (_frame_name(str(transform.header.frame_id)),
                     _frame_name(str(transform.child_frame_id)))
@@ -737,7 +780,7 @@ def write_bag(
             for item in frames:
                 stamp_ns, image = int(item[0]), item[1]
                 frame_camera = item[2] if len(item) > 2 else camera
-                image_message, info_message = _messages(typestore, ros1, stamp_ns, image,
+                image_message, info_message = _frame_messages(typestore, ros1, stamp_ns, image,
                                                         frame_camera, frame_id, count)
                 writer.write(image_connection, stamp_ns, serialize(image_message, IMAGE))
                 writer.write(info_connection, stamp_ns, serialize(info_message, CAMERA_INFO))
@@ -773,7 +816,7 @@ def _writer(path: Path, ros1: bool, storage: str) -> Iterator[Any]:
     writer.close()
 
 
-def _messages(typestore: Any, ros1: bool, stamp_ns: int, image: np.ndarray,
+def _frame_messages(typestore: Any, ros1: bool, stamp_ns: int, image: np.ndarray,
               camera: Intrinsics | None, frame_id: str, seq: int) -> tuple[Any, Any]:
     """The Image and CameraInfo messages of one frame."""
     types = typestore.types

@@ -6,6 +6,7 @@ means them; read back, the pixels, the camera and the poses are what was written
 from __future__ import annotations
 
 import math
+import os
 import sys
 from pathlib import Path
 
@@ -21,6 +22,7 @@ from gsrwt_cli.geometry.rotations import pose_from_rotation  # noqa: E402
 from gsrwt_cli.inputs import bags  # noqa: E402
 from gsrwt_cli.inputs.bags import (  # noqa: E402
     BagError,
+    DamagedBagError,
     FrameError,
     NoCameraInfoError,
     camera_info,
@@ -32,6 +34,7 @@ from gsrwt_cli.inputs.bags import (  # noqa: E402
 from gsrwt_cli.inputs.calibration import intrinsics_close  # noqa: E402
 from tests.helpers.bags import (  # noqa: E402
     FOCAL,
+    FRAME_STEP_NS,
     HEIGHT,
     KINDS,
     LINK_FROM_OPTICAL,
@@ -264,10 +267,50 @@ def test_a_ros2_bag_without_message_definitions(tmp_path):
     assert all(np.array_equal(f.pixels(), image) for f, image in zip(frames, colour))
 
 
+def _long_bag(directory: Path, kind: str, count: int = 40) -> tuple[Path, Path]:
+    """A bag of ``count`` frames of the sweep's renders, and the file that holds them."""
+    path = bag_path(directory, kind)
+    colour = rendered_frames(3)
+    with bag_builder(path, kind) as bag:
+        for i in range(count):
+            stamp = SWEEP[0].stamp_ns + i * FRAME_STEP_NS
+            bag.add("/camera/image_raw", "sensor_msgs/msg/Image", stamp,
+                    bag.image(stamp, colour[i % len(colour)], "bgr8"))
+    data = path if kind == "ros1" else next(p for p in path.iterdir() if p.suffix != ".yaml")
+    return path, data
+
+
+@pytest.mark.parametrize("kind", SLOW_KINDS)
+def test_a_truncated_bag_is_one_line(tmp_path, kind):
+    """A recording killed mid-write: the bag cannot be opened (no index, no end magic, a
+    malformed database), said in one line."""
+    path, data = _long_bag(tmp_path, kind)
+    os.truncate(data, data.stat().st_size // 2)
+    with pytest.raises(BagError, match="cannot be read as a ROS bag") as error:
+        list(image_frames(path, "/camera/image_raw"))
+    assert "\n" not in str(error.value)
+
+
+def test_a_bag_damaged_mid_stream_gives_its_frames_then_the_damage(tmp_path):
+    path, data = _long_bag(tmp_path, "ros1")
+    with open(data, "r+b") as handle:
+        handle.seek(data.stat().st_size // 2)
+        handle.write(b"\xff" * 50_000)
+    colour = rendered_frames(3)
+    read = []
+    with pytest.raises(DamagedBagError, match="damaged at message") as error:
+        for frame in image_frames(path, "/camera/image_raw"):
+            read.append(frame)
+    assert 10 < len(read) < 40 and error.value.index == len(read)
+    # ROS 1 has no checksums: frames whose bytes were overwritten read as other pixels; the
+    # first ten lie well before the damage
+    assert all(np.array_equal(f.pixels(), colour[f.index % len(colour)]) for f in read[:10])
+
+
 def test_not_a_bag(tmp_path):
     path = tmp_path / "walk.bag"
     path.write_bytes(b"#ROSBAG V2.0\n" + b"\x00" * 10)
-    with pytest.raises(BagError, match="walk.bag: not a ROS bag"):
+    with pytest.raises(BagError, match="walk.bag: cannot be read as a ROS bag"):
         list(image_frames(path, "/camera/image_raw"))
     with pytest.raises(BagError, match="no such file"):
         camera_info(tmp_path / "missing.bag", "/camera/image_raw")
