@@ -40,6 +40,7 @@ from __future__ import annotations
 import contextlib
 import math
 import os
+import re
 import secrets
 import shutil
 from collections import deque
@@ -100,6 +101,8 @@ ENCODINGS: dict[str, tuple[str, int, str | None]] = {
 #: The encoding :func:`write_bag` gives an array of (sample type, channels).
 _ENCODING_OF = {("u1", 1): "mono8", ("u2", 1): "mono16", ("u1", 3): "bgr8",
                 ("u1", 4): "bgra8", ("u2", 3): "bgr16", ("u2", 4): "bgra16"}
+#: A ROS topic name: tokens of letters, digits and ``_`` (none starting with a digit).
+_ROS_NAME = re.compile(r"/?[A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*")
 #: Sub-topics of image_transport's plugins, which share the raw topic's namespace.
 _TRANSPORTS = ("compressed", "compressedDepth", "theora", "zstd")
 
@@ -311,7 +314,7 @@ def camera_info_topic_of(image_topic: str) -> str:
 # Frames
 
 
-def image_frames(bag: str | Path, topic: str) -> Iterator[Frame]:
+def image_frames(bag: str | Path, topic: str, start: int = 0) -> Iterator[Frame]:
     """The frames of the image topic ``topic`` of ``bag``, one at a time.
 
     ``sensor_msgs/Image`` in the encodings of :data:`ENCODINGS` (``mono8``, ``mono16``,
@@ -327,6 +330,9 @@ def image_frames(bag: str | Path, topic: str) -> Iterator[Frame]:
     bag or topic cannot be read, and for an encoding it does not read (``yuv422``, Bayer,
     ``compressedDepth``: the topic, not one frame, is at fault); a frame whose data is
     damaged comes back with ``error`` set and the frames after it are read on.
+
+    ``start``: the index of the first frame to give (a rerun that continues): the frames
+    before it are not decoded, and times stay seconds from frame 0's stamp.
     """
     with _open(bag) as reader:
         connections = _connections(reader, bag, topic, (IMAGE, COMPRESSED_IMAGE),
@@ -339,11 +345,15 @@ def image_frames(bag: str | Path, topic: str) -> Iterator[Frame]:
             except Exception as error:
                 stamp = int(log_ns)
                 first = stamp if first is None else first
+                if index < start:
+                    continue
                 yield Frame(index, (stamp - first) / 1e9, stamp, None,
                             f"frame {index}: damaged message ({one_line(str(error), 200)})")
                 continue
             stamp = _stamp_ns(message, log_ns)
             first = stamp if first is None else first
+            if index < start:
+                continue
             try:
                 if connection.msgtype == IMAGE:
                     image = _raw_pixels(message, bag, topic)
@@ -733,6 +743,7 @@ def write_bag(
     path: str | Path, topic: str,
     frames: Iterable[tuple[int, np.ndarray] | tuple[int, np.ndarray, Intrinsics]],
     camera: Intrinsics | None, *, storage: str = "mcap", frame_id: str = "gsrwt_frontal",
+    compression: str | None = None, quality: int = 95,
 ) -> int:
     """Write ``frames`` as a ``sensor_msgs/Image`` topic ``topic`` and, beside it, the
     ``sensor_msgs/CameraInfo`` of the camera that sees them, one per frame (as
@@ -747,6 +758,12 @@ def write_bag(
     lens, if any, is written as :func:`~gsrwt_cli.inputs.calibration.write_ros_yaml` writes
     it), ``R`` the identity, ``P = [K | 0]``; the size is the image's (a camera whose size
     differs is refused).
+
+    ``compression`` ``png`` (lossless, 8 or 16 bits) or ``jpeg`` (8-bit grey or BGR, at
+    ``quality``): a ``sensor_msgs/CompressedImage`` topic instead, its ``format`` as
+    image_transport's compressed plugin writes it (``bgr8; png compressed bgr8``); name the
+    topic as that plugin does (``/frontal/image/compressed``: its ``camera_info`` is then
+    ``/frontal/camera_info``). ``topic`` must be a ROS name (letters, digits, ``_``, ``/``).
 
     ``path`` ending in ``.bag``: ROS 1. Otherwise a ROS 2 bag directory (format version 8),
     ``storage`` ``mcap`` (the default: ROS 2's default storage since Iron, one
@@ -763,6 +780,11 @@ def write_bag(
     ros1 = target.suffix == ".bag"
     if storage not in ("mcap", "sqlite3"):
         raise BagError(f"unknown ROS 2 storage {quote(storage)}: mcap or sqlite3")
+    if compression not in (None, "png", "jpeg"):
+        raise BagError(f"unknown image compression {quote(compression)}: png or jpeg")
+    if not _ROS_NAME.fullmatch(topic):
+        raise BagError(f"{quote(topic)} is not a ROS topic name (letters, digits, _ and /, "
+                       "no token starting with a digit)")
     if os.path.lexists(target):
         raise BagError(f"{one_line(str(path), 200)}: exists; a bag is never overwritten")
     parent = target.parent
@@ -772,7 +794,8 @@ def write_bag(
         inner = temporary / target.name
         typestore = get_typestore(Stores.ROS1_NOETIC if ros1 else Stores.ROS2_HUMBLE)
         with _writer(inner, ros1, storage) as writer:
-            image_connection = writer.add_connection(topic, IMAGE, typestore=typestore)
+            image_type = IMAGE if compression is None else COMPRESSED_IMAGE
+            image_connection = writer.add_connection(topic, image_type, typestore=typestore)
             info_connection = writer.add_connection(camera_info_topic_of(topic), CAMERA_INFO,
                                                     typestore=typestore)
             serialize = typestore.serialize_ros1 if ros1 else typestore.serialize_cdr
@@ -780,9 +803,10 @@ def write_bag(
             for item in frames:
                 stamp_ns, image = int(item[0]), item[1]
                 frame_camera = item[2] if len(item) > 2 else camera
-                image_message, info_message = _frame_messages(typestore, ros1, stamp_ns, image,
-                                                        frame_camera, frame_id, count)
-                writer.write(image_connection, stamp_ns, serialize(image_message, IMAGE))
+                image_message, info_message = _frame_messages(
+                    typestore, ros1, stamp_ns, image, frame_camera, frame_id, count,
+                    compression, quality)
+                writer.write(image_connection, stamp_ns, serialize(image_message, image_type))
                 writer.write(info_connection, stamp_ns, serialize(info_message, CAMERA_INFO))
                 count += 1
         if os.path.lexists(target):
@@ -817,8 +841,9 @@ def _writer(path: Path, ros1: bool, storage: str) -> Iterator[Any]:
 
 
 def _frame_messages(typestore: Any, ros1: bool, stamp_ns: int, image: np.ndarray,
-              camera: Intrinsics | None, frame_id: str, seq: int) -> tuple[Any, Any]:
-    """The Image and CameraInfo messages of one frame."""
+                    camera: Intrinsics | None, frame_id: str, seq: int,
+                    compression: str | None, quality: int) -> tuple[Any, Any]:
+    """The Image (or CompressedImage) and CameraInfo messages of one frame."""
     types = typestore.types
     image = np.asarray(image)
     channels = 1 if image.ndim == 2 else image.shape[2] if image.ndim == 3 else 0
@@ -838,11 +863,22 @@ def _frame_messages(typestore: Any, ros1: bool, stamp_ns: int, image: np.ndarray
     header_type = types["std_msgs/msg/Header"]
     header = (header_type(seq=seq, stamp=stamp, frame_id=frame_id) if ros1
               else header_type(stamp=stamp, frame_id=frame_id))
-    image_message = types[IMAGE](
-        header=header, height=height, width=width, encoding=encoding, is_bigendian=0,
-        step=width * channels * little.dtype.itemsize,
-        data=np.frombuffer(little.tobytes(), dtype=np.uint8),
-    )
+    if compression is None:
+        image_message = types[IMAGE](
+            header=header, height=height, width=width, encoding=encoding, is_bigendian=0,
+            step=width * channels * little.dtype.itemsize,
+            data=np.frombuffer(little.tobytes(), dtype=np.uint8),
+        )
+    else:
+        from ..imaging.images import ImageError, encode_image
+
+        try:
+            data = encode_image(image, ".png" if compression == "png" else ".jpg", quality)
+        except ImageError as error:
+            raise BagError(f"frame {seq}: cannot write it as {compression} ({error})") from None
+        image_message = types[COMPRESSED_IMAGE](
+            header=header, format=f"{encoding}; {compression} compressed {encoding}",
+            data=np.frombuffer(data, dtype=np.uint8))
     k = camera.matrix()
     lens = camera.lens
     d = np.zeros(5) if lens is None else lens.opencv_coefficients()

@@ -199,6 +199,13 @@ def test_frames_are_read_one_at_a_time(scene):
     frames.close()  # the reader closes with the generator
 
 
+def test_a_rerun_starts_at_a_frame_with_times_from_the_first(scene):
+    frames = list(image_frames(scene, "/fisheye/image_raw/compressed", start=3))
+    assert [frame.index for frame in frames] == [3, 4]
+    assert [frame.time for frame in frames] == pytest.approx([0.3, 0.4], abs=1e-9)
+    assert np.array_equal(frames[0].pixels(), rendered_frames(3)[3])
+
+
 def test_compressed_frames_and_a_corrupt_one(scene):
     colour = rendered_frames(3)
     frames = list(image_frames(scene, "/fisheye/image_raw/compressed"))
@@ -528,6 +535,33 @@ def test_write_bag_round_trip(tmp_path, kind):
     assert all(np.array_equal(f.pixels(), image)
                for f, image in zip(image_frames(other, "/deep/image"), deep))
     assert camera_info(other, "/deep/image").fy == 61.0
+
+
+def test_write_bag_compressed(tmp_path):
+    colour = rendered_frames(3)
+    deep = [g.astype(np.uint16) * 257 + 3 for g in rendered_frames(1)]
+    camera = Intrinsics(fx=FOCAL, fy=FOCAL, cx=30.0, cy=20.5)
+    png = tmp_path / "png"
+    write_bag(png, "/frontal/image/compressed", zip(_stamps(), deep), camera,
+              compression="png")
+    frames = list(image_frames(png, "/frontal/image/compressed"))
+    assert all(np.array_equal(f.pixels(), image) for f, image in zip(frames, deep))
+    assert [f.stamp_ns for f in frames] == _stamps()
+    assert camera_info(png, "/frontal/image/compressed").cx == 30.0
+    jpeg = tmp_path / "jpeg.bag"
+    write_bag(jpeg, "/frontal/image/compressed", zip(_stamps(), colour), camera,
+              compression="jpeg", quality=90)
+    for frame, image in zip(image_frames(jpeg, "/frontal/image/compressed"), colour):
+        reference = cv2.imdecode(cv2.imencode(".jpg", image, [cv2.IMWRITE_JPEG_QUALITY, 90])[1],
+                                 cv2.IMREAD_UNCHANGED)
+        assert np.abs(frame.pixels().astype(int) - reference.astype(int)).max() <= 2
+    with pytest.raises(BagError, match="frame 0: cannot write it as jpeg"):
+        write_bag(tmp_path / "deep", "/deep", zip(_stamps(), deep), camera,
+                  compression="jpeg")
+    for topic in ("/frontal/2image", "frontal image", "/frontal//image", ""):
+        with pytest.raises(BagError, match="is not a ROS topic name"):
+            write_bag(tmp_path / "bad", topic, [], camera)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["jpeg.bag", "png"]
 
 
 def test_write_bag_never_overwrites_and_leaves_nothing_when_it_fails(tmp_path):
