@@ -481,7 +481,7 @@ def _camera_fields(message: Any) -> tuple:
 
 def _check_camera_window(message: Any, name: str, topic: str) -> None:
     """Refuse binning and a region of interest: ``K`` is then the full sensor's."""
-    binning = (int(message.binning_x), int(message.binning_y))
+    binning = (max(1, int(message.binning_x)), max(1, int(message.binning_y)))  # 0: none
     roi = message.roi
     if max(binning) > 1:
         raise BagError(f"{name}: the camera on {quote(topic)} has binning {binning[0]}x"

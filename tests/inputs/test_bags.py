@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import math
 import os
+import re
 import sys
 from pathlib import Path
 
@@ -368,6 +369,28 @@ def test_no_camera_info_is_one_line_saying_what_to_give(scene):
     assert "'/camera/camera_info'" in message  # the ones it has
     assert "camera_info topic, or give the camera's intrinsics" in message
     assert error.value.topic == "/nocam/camera_info"
+
+
+def test_camera_info_that_changes_or_is_binned_or_uncalibrated_is_refused(tmp_path):
+    path = bag_path(tmp_path, "mcap")
+    other = K.copy()
+    other[0, 0] += 1
+    model, d = CAMERAS["/camera"]
+    with bag_builder(path, "mcap") as bag:
+        for sample, k in zip(SWEEP[:2], (K, other)):
+            bag.add("/a/camera_info", "sensor_msgs/msg/CameraInfo", sample.stamp_ns,
+                    bag.camera_info(sample.stamp_ns, k, d, model))
+        binned = bag.camera_info(SWEEP[0].stamp_ns, K, d, model)
+        binned.binning_x = 2
+        bag.add("/b/camera_info", "sensor_msgs/msg/CameraInfo", SWEEP[0].stamp_ns, binned)
+        bag.add("/c/camera_info", "sensor_msgs/msg/CameraInfo", SWEEP[0].stamp_ns,
+                bag.camera_info(SWEEP[0].stamp_ns, np.zeros((3, 3)), [], ""))
+    faults = {"/a/image": "the camera on '/a/camera_info' changes at message 1",
+              "/b/image": "has binning 2x1",
+              "/c/image": "/c/camera_info: key 'K': all zeros: an uncalibrated camera"}
+    for topic, message in faults.items():
+        with pytest.raises(BagError, match=re.escape(message)):
+            camera_info(path, topic)
 
 
 # --------------------------------------------------------------------------------------------
