@@ -741,8 +741,9 @@ def _frame_path(edges: set[tuple[str, str]], start: str,
 
 def write_bag(
     path: str | Path, topic: str,
-    frames: Iterable[tuple[int, np.ndarray] | tuple[int, np.ndarray, Intrinsics]],
-    camera: Intrinsics | None, *, storage: str = "mcap", frame_id: str = "gsrwt_frontal",
+    frames: Iterable[tuple[int, np.ndarray] | tuple[int, np.ndarray, Intrinsics | np.ndarray]],
+    camera: Intrinsics | np.ndarray | None, *, storage: str = "mcap",
+    frame_id: str = "gsrwt_frontal",
     compression: str | None = None, quality: int = 95,
 ) -> int:
     """Write ``frames`` as a ``sensor_msgs/Image`` topic ``topic`` and, beside it, the
@@ -753,11 +754,11 @@ def write_bag(
     ``frames``: ``(stamp_ns, image)`` or ``(stamp_ns, image, camera)`` (a camera per frame
     overrides ``camera``): each image grey, BGR or BGRA, uint8 or uint16 (``mono8``,
     ``mono16``, ``bgr8``, ``bgra8``, ``bgr16``, ``bgra16``), its header stamp and log time
-    ``stamp_ns``, ``header.frame_id`` ``frame_id``. ``camera``: the output view's camera
-    (its ``K``; the rectified view is a pinhole, so ``D`` is 5 zeros of ``plumb_bob``; a
-    lens, if any, is written as :func:`~gsrwt_cli.inputs.calibration.write_ros_yaml` writes
-    it), ``R`` the identity, ``P = [K | 0]``; the size is the image's (a camera whose size
-    differs is refused).
+    ``stamp_ns``, ``header.frame_id`` ``frame_id``. ``camera``: the output view's camera,
+    an :class:`~gsrwt_cli.geometry.camera.Intrinsics` or its 3x3 ``K``: ``K``; ``D`` five
+    zeros of ``plumb_bob`` (the rectified view is a pinhole; a lens, if any, is written as
+    :func:`~gsrwt_cli.inputs.calibration.write_ros_yaml` writes it); ``R`` the identity;
+    ``P = [K | 0]``; the size is the image's (a camera whose size differs is refused).
 
     ``compression`` ``png`` (lossless, 8 or 16 bits) or ``jpeg`` (8-bit grey or BGR, at
     ``quality``): a ``sensor_msgs/CompressedImage`` topic instead, its ``format`` as
@@ -818,6 +819,18 @@ def write_bag(
     return count
 
 
+def _camera_of_matrix(matrix: np.ndarray, seq: int) -> Intrinsics:
+    """The pinhole :class:`Intrinsics` of a camera matrix ``K``."""
+    k = np.asarray(matrix, dtype=np.float64)
+    if k.shape != (3, 3) or k[1, 0] != 0 or k[2, 0] != 0 or k[2, 1] != 0 or k[2, 2] != 1:
+        raise BagError(f"frame {seq}: the camera matrix must be [[fx, skew, cx], [0, fy, cy], "
+                       f"[0, 0, 1]], got {np.array2string(k, separator=', ')}")
+    try:
+        return Intrinsics(fx=k[0, 0], fy=k[1, 1], cx=k[0, 2], cy=k[1, 2], skew=k[0, 1])
+    except ValueError as error:
+        raise BagError(f"frame {seq}: {error}") from None
+
+
 @contextlib.contextmanager
 def _writer(path: Path, ros1: bool, storage: str) -> Iterator[Any]:
     """An open rosbags writer: ROS 1, or ROS 2 with ``storage``."""
@@ -853,6 +866,8 @@ def _frame_messages(typestore: Any, ros1: bool, stamp_ns: int, image: np.ndarray
                        f"{image.dtype} (grey, BGR or BGRA of uint8 or uint16)")
     if camera is None:
         raise BagError(f"frame {seq}: no camera for its camera_info")
+    if not isinstance(camera, Intrinsics):
+        camera = _camera_of_matrix(camera, seq)
     height, width = image.shape[:2]
     if camera.width is not None and (camera.width, camera.height) != (width, height):
         raise BagError(f"frame {seq}: the camera is {camera.width}x{camera.height} pixels, the "

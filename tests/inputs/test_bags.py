@@ -565,7 +565,7 @@ def test_write_bag_compressed(tmp_path):
     deep = [g.astype(np.uint16) * 257 + 3 for g in rendered_frames(1)]
     camera = Intrinsics(fx=FOCAL, fy=FOCAL, cx=30.0, cy=20.5)
     png = tmp_path / "png"
-    write_bag(png, "/frontal/image/compressed", zip(_stamps(), deep), camera,
+    write_bag(png, "/frontal/image/compressed", zip(_stamps(), deep), camera.matrix(),
               compression="png")
     frames = list(image_frames(png, "/frontal/image/compressed"))
     assert all(np.array_equal(f.pixels(), image) for f, image in zip(frames, deep))
@@ -581,6 +581,8 @@ def test_write_bag_compressed(tmp_path):
     with pytest.raises(BagError, match="frame 0: cannot write it as jpeg"):
         write_bag(tmp_path / "deep", "/deep", zip(_stamps(), deep), camera,
                   compression="jpeg")
+    with pytest.raises(BagError, match=r"frame 0: the camera matrix must be \[\[fx"):
+        write_bag(tmp_path / "bad", "/a", zip(_stamps(), deep), np.eye(3)[::-1])
     for topic in ("/frontal/2image", "frontal image", "/frontal//image", ""):
         with pytest.raises(BagError, match="is not a ROS topic name"):
             write_bag(tmp_path / "bad", topic, [], camera)
