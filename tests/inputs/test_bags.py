@@ -607,7 +607,7 @@ def test_write_bag_never_overwrites_and_leaves_nothing_when_it_fails(tmp_path):
 @pytest.mark.parametrize("kind", KINDS)
 def test_frames_are_read_in_bounded_memory(tmp_path, kind):
     """40 frames of 640x480 BGR (37 MB): reading them all holds about the reader's chunks
-    and a few frames (measured: peaks of 7-9 MB, whatever the bag's length)."""
+    and a frame (measured: peaks of 4-10 MB, whatever the bag's length: docs/BAGS.md)."""
     import tracemalloc
 
     path = bag_path(tmp_path, kind)
