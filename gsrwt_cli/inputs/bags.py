@@ -43,6 +43,7 @@ import os
 import re
 import secrets
 import shutil
+from array import array
 from collections import deque
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
@@ -553,12 +554,18 @@ def pose_samples(
                        np.asarray(rotations, dtype=np.float64)[order], kind, constant)
 
 
-def _quaternion_rotation(q: Any, where: str) -> Matrix:
-    """The rotation of a ROS quaternion message ``(x, y, z, w)``; refused if not unit."""
+def _quaternion_rotation(qw: float, qx: float, qy: float, qz: float, where: str) -> Matrix:
+    """The rotation of a quaternion (:func:`rotation_from_quaternion`); refused, naming
+    ``where``, if not of unit length."""
     try:
-        return rotation_from_quaternion(float(q.w), float(q.x), float(q.y), float(q.z))
+        return rotation_from_quaternion(qw, qx, qy, qz)
     except PoseError as error:
         raise BagError(f"{where}: {error}") from None
+
+
+def _message_rotation(q: Any, where: str) -> Matrix:
+    """The rotation of a ROS ``geometry_msgs/Quaternion`` (fields ``x, y, z, w``)."""
+    return _quaternion_rotation(float(q.w), float(q.x), float(q.y), float(q.z), where)
 
 
 def _message_samples(
@@ -583,13 +590,13 @@ def _message_samples(
                 raise BagError(f"{where}: its header.frame_id is {quote(frame, 60)}, not the "
                                f"wall frame {quote(wall_frame, 60)}")
             q = message.pose.orientation if kind == POSE_STAMPED else message.quaternion
-            wall_from_camera = _quaternion_rotation(q, where)
+            wall_from_camera = _message_rotation(q, where)
             rotation = world_from_camera_from_opencv(wall_from_camera.T)
         elif kind == IMU:
             if float(message.orientation_covariance[0]) == -1.0:
                 raise BagError(f"{where}: the Imu gives no orientation "
                                "(orientation_covariance[0] = -1)")
-            world_from_body = _quaternion_rotation(message.orientation, where)
+            world_from_body = _message_rotation(message.orientation, where)
             rotation = world_from_camera_from_ros_body(world_from_body)
         else:
             names = [str(n) for n in message.name]
@@ -631,6 +638,25 @@ def _joint_signs(joint_signs: tuple[float, float] | None) -> tuple[float, float]
     return signs[0], signs[1]
 
 
+class _EdgeSamples:
+    """One moving tf edge's samples, compactly (a long bag's ``/tf`` holds millions): stamps,
+    quaternions ``(x, y, z, w)`` and the index of the message of each."""
+
+    def __init__(self) -> None:
+        self.stamps = array("q")
+        self.quaternions = array("d")
+        self.messages = array("q")
+
+    def add(self, stamp: int, q: Any, index: int) -> None:
+        self.stamps.append(stamp)
+        self.quaternions.extend((float(q.x), float(q.y), float(q.z), float(q.w)))
+        self.messages.append(index)
+
+    def rows(self) -> dict[int, int]:
+        """Each stamp's row (the last, when one is given twice)."""
+        return {stamp: row for row, stamp in enumerate(self.stamps)}
+
+
 def _tf_samples(
     reader: Any, name: str, topic: str, wall_frame: str | None, camera_frame: str | None,
 ) -> tuple[list[int], list[Matrix], bool]:
@@ -645,20 +671,24 @@ def _tf_samples(
                    if c.topic in topics and c.msgtype in TF_MESSAGES]
     # Each edge's quaternions as read, with where they were (a rotation is made only for the
     # edges of the chain: a bad quaternion elsewhere in the tree is none of gsrwt's business).
-    static: dict[tuple[str, str], tuple[int, Any, str]] = {}
-    moving: dict[tuple[str, str], dict[int, tuple[Any, str]]] = {}
+    static: dict[tuple[str, str], tuple[int, tuple[float, ...], str]] = {}
+    moving: dict[tuple[str, str], _EdgeSamples] = {}
     what = " and ".join(quote(t) for t in sorted(topics))
-    for index, connection, log_ns, raw in _messages(reader, connections, name, what):
-        message = _deserialize(reader, raw, connection, f"{name}: {what}", index)
+    counts = dict.fromkeys(topics, 0)  # each message's index in its own topic
+    for merged, connection, log_ns, raw in _messages(reader, connections, name, what):
+        message = _deserialize(reader, raw, connection, f"{name}: {what}", merged)
+        index = counts[connection.topic]
+        counts[connection.topic] += 1
         for transform in message.transforms:
             edge = (_frame_name(str(transform.header.frame_id)),
                     _frame_name(str(transform.child_frame_id)))
-            where = f"{quote(connection.topic)} message {index}"
             stamp = _stamp_ns(transform, log_ns)
+            q = transform.transform.rotation
             if connection.topic == static_topic:
-                static[edge] = (stamp, transform.transform.rotation, where)
+                static[edge] = (stamp, (float(q.x), float(q.y), float(q.z), float(q.w)),
+                                f"{quote(connection.topic)} message {index}")
             else:
-                moving.setdefault(edge, {})[stamp] = (transform.transform.rotation, where)
+                moving.setdefault(edge, _EdgeSamples()).add(stamp, q, index)
     path = _frame_path(set(static) | set(moving), wall, camera)
     if path is None:
         frames = sorted({f for edge in set(static) | set(moving) for f in edge})
@@ -668,41 +698,48 @@ def _tf_samples(
                        f"connects the wall frame {quote(wall, 60)} to the camera frame "
                        f"{quote(camera, 60)} (its frames: {listed or 'none'})")
     steps = [(edge, forward, edge in moving) for edge, forward in path]
-    moving_edges = [edge for edge, _, is_moving in steps if is_moving]
-    if moving_edges:
-        shared = set(moving[moving_edges[0]])
-        for edge in moving_edges[1:]:
-            shared &= set(moving[edge])
+    rows = {edge: moving[edge].rows() for edge, _, is_moving in steps if is_moving}
+    if rows:
+        shared = set.intersection(*(set(edge_rows) for edge_rows in rows.values()))
         if not shared:
             raise BagError(
                 f"{name}: the moving transforms of the chain from {quote(wall, 60)} to "
-                f"{quote(camera, 60)} ({', '.join(f'{a} -> {b}' for a, b in moving_edges)}) "
+                f"{quote(camera, 60)} ({', '.join(f'{a} -> {b}' for a, b in rows)}) "
                 "are never stamped at the same time"
             )
         stamps = sorted(shared)
-        constant = False
     else:
         stamps = [max(static[edge][0] for edge, _, _ in steps)]
-        constant = True
-    def rotation(edge: tuple[str, str], q: Any, where: str) -> Matrix:
-        return _quaternion_rotation(q, f"{name}: {where}, transform "
-                                       f"{quote(edge[0], 60)} -> {quote(edge[1], 60)}")
 
-    fixed = {edge: rotation(edge, *static[edge][1:]) for edge, _, is_moving in steps
-             if not is_moving}
+    def rotation(edge: tuple[str, str], q: tuple[float, ...], where: Any) -> Matrix:
+        """The rotation of ``q = (x, y, z, w)``; ``where()`` names its message."""
+        x, y, z, w = q
+        try:
+            return rotation_from_quaternion(w, x, y, z)
+        except PoseError as error:
+            raise BagError(f"{name}: {where()}, transform {quote(edge[0], 60)} -> "
+                           f"{quote(edge[1], 60)}: {error}") from None
+
+    fixed = {edge: rotation(edge, static[edge][1], lambda edge=edge: static[edge][2])
+             for edge, _, is_moving in steps if not is_moving}
     rotations = []
     for stamp in stamps:
         wall_from_camera = np.eye(3)
         for edge, forward, is_moving in steps:
-            parent_from_child = (rotation(edge, *moving[edge][stamp]) if is_moving
-                                 else fixed[edge])
+            if is_moving:
+                samples, row = moving[edge], rows[edge][stamp]
+                parent_from_child = rotation(
+                    edge, tuple(samples.quaternions[4 * row:4 * row + 4]),
+                    lambda: f"{quote(topic)} message {samples.messages[row]}")  # noqa: B023
+            else:
+                parent_from_child = fixed[edge]
             wall_from_camera = wall_from_camera @ (parent_from_child if forward
                                                    else parent_from_child.T)
         try:
             rotations.append(world_from_camera_from_opencv(wall_from_camera.T))
         except PoseError as error:  # only a product far from orthonormal could fail
             raise BagError(f"{name}: the tf chain at {stamp} ns: {error}") from None
-    return stamps, rotations, constant
+    return stamps, rotations, not rows
 
 
 def _frame_path(edges: set[tuple[str, str]], start: str,

@@ -477,6 +477,24 @@ def test_ros1_tf_messages_of_the_old_type(tmp_path):
     _assert_sweep(pose_samples(path, "/tf", wall_frame="wall", camera_frame="optical"))
 
 
+def test_tf_quaternions_are_checked_on_the_chain_only(tmp_path):
+    path = bag_path(tmp_path, "mcap")
+    with bag_builder(path, "mcap") as bag:
+        for i, sample in enumerate(SWEEP):
+            q = ros_quaternion(wall_from_optical(sample.pan, sample.tilt, sample.roll))
+            bad = (0.0, 0.0, 0.0, 2.0)
+            bag.add("/tf", "tf2_msgs/msg/TFMessage", sample.stamp_ns, bag.tf([
+                bag.transform(sample.stamp_ns, "wall", "optical", bad if i == 3 else q),
+                bag.transform(sample.stamp_ns, "map", "odom", bad)]))
+        bag.add("/tf_static", "tf2_msgs/msg/TFMessage", sample.stamp_ns, bag.tf([
+            bag.transform(sample.stamp_ns, "wall", "fixed", bad)]))
+    with pytest.raises(BagError, match="'/tf' message 3, transform 'wall' -> 'optical': the "
+                                       "quaternion .* is not a unit quaternion"):
+        pose_samples(path, "/tf", wall_frame="wall", camera_frame="optical")
+    with pytest.raises(BagError, match="'/tf_static' message 0, transform 'wall' -> 'fixed'"):
+        pose_samples(path, "/tf", wall_frame="wall", camera_frame="fixed")
+
+
 def test_tf_of_static_transforms_only_is_constant(scene):
     samples = pose_samples(scene, "/tf", wall_frame="wall", camera_frame="wall_up")
     assert samples.constant and len(samples) == 1
