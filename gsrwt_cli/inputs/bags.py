@@ -636,7 +636,10 @@ def _message_samples(
 def _joint_signs(joint_signs: tuple[float, float] | None) -> tuple[float, float]:
     if joint_signs is None:
         return 1.0, 1.0
-    signs = tuple(float(s) for s in joint_signs)
+    try:
+        signs = tuple(float(s) for s in joint_signs)
+    except (TypeError, ValueError):
+        signs = ()
     if len(signs) != 2 or any(s not in (1.0, -1.0) for s in signs):
         raise BagError(f"the joint signs must be two of +1 and -1, got {quote(joint_signs)}")
     return signs[0], signs[1]

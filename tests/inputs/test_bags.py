@@ -449,9 +449,10 @@ def test_joint_state_without_the_named_joints(scene):
         pose_samples(scene, "/joint_states", joints=("ptu_pan", "tilt_joint"))
     with pytest.raises(BagError, match="name its pan and tilt joints"):
         pose_samples(scene, "/joint_states")
-    with pytest.raises(BagError, match="two of"):
-        pose_samples(scene, "/joint_states", joints=("ptu_pan", "ptu_tilt"),
-                     joint_signs=(2, 1))
+    for signs in ((2, 1), ("up", 1), (1,), 1):
+        with pytest.raises(BagError, match="two of"):
+            pose_samples(scene, "/joint_states", joints=("ptu_pan", "ptu_tilt"),
+                         joint_signs=signs)
 
 
 @pytest.mark.parametrize("wall, camera", [
