@@ -283,6 +283,28 @@ def opencv_from_world_from_camera(world_from_camera: ArrayLike) -> Matrix:
     return THESIS_FROM_OPENCV.T @ w.T @ THESIS_FROM_OPENCV
 
 
+#: ROS body frame (REP 103: x forward, y left, z up) -> thesis frame (X up, Y right, Z forward),
+#: for a body and its world alike: ``X = z, Y = -y, Z = x``.
+THESIS_FROM_ROS_BODY: Matrix = np.array([[0.0, 0.0, 1.0], [0.0, -1.0, 0.0], [1.0, 0.0, 0.0]])
+THESIS_FROM_ROS_BODY.setflags(write=False)
+
+
+def world_from_camera_from_ros_body(world_from_body: ArrayLike) -> Matrix:
+    """The thesis ``world_from_camera`` of a body's orientation in ROS's body axes: ``M R M^T``.
+
+    ``world_from_body`` maps vectors of a body frame in ROS's convention (REP 103: x forward,
+    y left, z up; an ``Imu``'s frame, a ``camera_link``) to a gravity-aligned world frame in
+    the same convention (x forward, into the wall; y left; z up), as a ``sensor_msgs/Imu``
+    orientation does (REP 145). ``M`` = :data:`THESIS_FROM_ROS_BODY` re-expresses both in
+    the thesis's axes. The body's x axis is the optical axis: the identity is a camera facing
+    the wall squarely; a yaw by ``a`` (about z, up, to the left) is pan ``a``, a pitch by
+    ``b`` (about y, left: positive looks down) is tilt ``-b``, a roll by ``r`` (about x:
+    positive lifts the left side) is roll ``r`` (the top leans right).
+    """
+    r = _rotation("world_from_body", world_from_body)
+    return THESIS_FROM_ROS_BODY @ r @ THESIS_FROM_ROS_BODY.T
+
+
 # --------------------------------------------------------------------------------------------
 # Rodrigues vectors and quaternions <-> rotation matrices (numpy, no OpenCV)
 # --------------------------------------------------------------------------------------------

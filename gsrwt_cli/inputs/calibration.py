@@ -556,6 +556,35 @@ def _ros_matrix(
     return matrix.reshape(shape) if shape is not None else matrix
 
 
+def intrinsics_from_camera_info(
+    source: str, matrix: object, distortion: object, model: str | None,
+    width: float | None, height: float | None,
+) -> Intrinsics:
+    """The :class:`Intrinsics` of a ``sensor_msgs/CameraInfo`` message's fields, checked as a
+    ROS ``camera_info`` file's are (the same lens models and coefficient counts).
+
+    ``source`` names the message in errors (``walk.bag /camera/camera_info``); ``matrix``:
+    its ``K`` (9 numbers, row major), ``distortion``: its ``D``, ``model``: its
+    ``distortion_model`` (empty: none), ``width``/``height``: its size (0: unknown). Raises
+    :class:`CalibrationError` naming the field (``K``, ``D``, ``distortion_model``).
+    """
+    values = np.asarray(matrix, dtype=np.float64).ravel()
+    if values.size != 9:
+        raise CalibrationError(source, "K", f"expected 9 numbers, got {values.size}")
+    coefficients = np.asarray(distortion, dtype=np.float64).ravel()
+    if coefficients.size > 14:
+        raise CalibrationError(
+            source, "D", f"expected at most 14 numbers, got {coefficients.size}"
+        )
+    if not values.any():
+        raise CalibrationError(source, "K", "all zeros: an uncalibrated camera")
+    return _intrinsics(
+        source, matrix=values.reshape(3, 3), matrix_key="K", distortion=coefficients,
+        distortion_key="D", model=model or None, width=width or None, height=height or None,
+        size_keys=("width", "height"),
+    )
+
+
 # --------------------------------------------------------------------------------------------
 # Checking
 

@@ -35,6 +35,7 @@ from gsrwt_cli.geometry.rotations import (
     rvec_from_pose,
     rvec_from_rotation,
     world_from_camera_from_opencv,
+    world_from_camera_from_ros_body,
 )
 from tests.helpers.camera import camera_axes, project_wall_points, rodrigues
 from tests.helpers.paths import DATA
@@ -433,6 +434,22 @@ def test_the_opencv_and_thesis_frames():
     r = cv2.Rodrigues(np.array([0.2, -0.4, 0.9]))[0]
     np.testing.assert_allclose(world_from_camera_from_opencv(r), C @ r.T @ C.T, atol=1e-15)
     np.testing.assert_allclose(opencv_from_world_from_camera(C @ r.T @ C.T), r, atol=1e-15)
+
+
+@settings(max_examples=100, deadline=None)
+@given(pan=pans, tilt=tilts, roll=st.floats(-170, 170))
+def test_ros_body_axes_yaw_pitch_roll_are_pan_minus_tilt_roll(pan, tilt, roll):
+    """A ROS body (x forward, y left, z up) turned by yaw, pitch, roll (SciPy's intrinsic
+    ZYX, as ROS's RPY) in a world whose x faces the wall is pan = yaw, tilt = -pitch, roll;
+    its axes are those of the camera built from words."""
+    from scipy.spatial.transform import Rotation
+
+    world_from_body = Rotation.from_euler("ZYX", [pan, -tilt, roll], degrees=True).as_matrix()
+    w = world_from_camera_from_ros_body(world_from_body)
+    up, right, forward = camera_axes(pan, tilt, roll)
+    np.testing.assert_allclose(w, np.column_stack([up, right, forward]), atol=1e-12)
+    pose = pose_from_rotation(w)
+    assert (pose.pan, pose.tilt, pose.roll) == pytest.approx((pan, tilt, roll), abs=1e-9)
 
 
 # --------------------------------------------------------------------------------------------

@@ -23,6 +23,7 @@ from gsrwt_cli.inputs.calibration import (
     MAX_FILE_BYTES,
     CalibrationError,
     intrinsics_close,
+    intrinsics_from_camera_info,
     load_camera,
     write_opencv_xml,
     write_opencv_yaml,
@@ -485,3 +486,30 @@ def test_damaged_calibration_files_are_read_or_refused_never_a_crash():
     assert done.stderr == ""  # OpenCV printed nothing either
     read, refused = map(int, done.stdout.split())
     assert read + refused == 1200 and read > 20 and refused > 600
+
+
+def test_camera_info_fields_are_checked_as_a_camera_info_file_is():
+    """A CameraInfo message's fields (as a bag holds them) go through the file's checks."""
+    k = [500.0, 0.5, 320.0, 0.0, 510.0, 240.0, 0.0, 0.0, 1.0]
+    camera = intrinsics_from_camera_info("walk.bag /cam/camera_info", k,
+                                         [0.1, -0.2, 0.0, 0.0, 0.05], "plumb_bob", 640, 480)
+    assert (camera.fx, camera.fy, camera.cx, camera.cy, camera.skew) == (500, 510, 320, 240,
+                                                                         0.5)
+    assert (camera.width, camera.height) == (640, 480)
+    assert camera.lens.model == "plumb_bob" and camera.lens.value("k2") == -0.2
+    pinhole = intrinsics_from_camera_info("bag", k, [], "", 0, 0)
+    assert pinhole.lens is None and pinhole.width is None
+    assert intrinsics_from_camera_info("bag", k, [0.0] * 5, "plumb_bob", 0, 0).lens is None
+    assert intrinsics_from_camera_info("bag", k, [0.1] * 4, "fisheye", 0, 0).lens.is_fisheye
+    faults = [
+        (([0.0] * 9, [], "", 0, 0), "key 'K': all zeros: an uncalibrated camera"),
+        ((k[:6], [], "", 0, 0), "key 'K': expected 9 numbers, got 6"),
+        ((k, [0.1] * 6, "plumb_bob", 0, 0), "key 'D': the plumb_bob model takes 4 or 5"),
+        ((k, [0.1] * 4, "kannala", 0, 0), "key 'distortion_model': unknown lens model"),
+        ((k, [], "", 640, 0), "key 'height': missing"),
+        ((k[:2] + [5000.0] + k[3:], [], "", 640, 480), "principal point"),
+    ]
+    for fields, message in faults:
+        with pytest.raises(CalibrationError, match=re.escape(message)) as error:
+            intrinsics_from_camera_info("walk.bag /cam/camera_info", *fields)
+        assert str(error.value).startswith("walk.bag /cam/camera_info: ")
