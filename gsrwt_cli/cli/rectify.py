@@ -48,6 +48,9 @@ from ..batch.rectify_jobs import (
     settings_for_elsewhere,
     worker_context,
 )
+from ..batch.video_jobs import CODEC_CHOICES as VIDEO_CODEC_CHOICES
+from ..batch.video_jobs import DEFAULT_MAX_POSE_GAP
+from ..batch.video_jobs import TIME_MODES as VIDEO_TIME_MODES
 from ..geometry.framing import (
     EmptyOutputError,
     FrameOutsideImageError,
@@ -70,6 +73,7 @@ from ..inputs.sources import (
     sources_from_directory,
     sources_from_location,
 )
+from ..inputs.videos import is_video_name
 from ..io.outputs import open_atomic, remove_stale_temporaries
 from ..io.storage import Location, location
 from ..io.targets import file_identity, protected_files
@@ -531,6 +535,24 @@ def dask_executor(address: str, processes: int, retries: int,
               help="With --auto: the wall to rectify is the vertical plane with the most "
                    "horizontal edges (the surface the photo shows) or the most frontal one "
                    "(|pan| <= 45, as 'gsrwt estimate' reports poses).")
+@click.option("--poses", default=None, type=click.Path(dir_okay=False),
+              help="A video's poses: a CSV or YAML file of a time and a pose per row (time "
+                   "in seconds; pan, tilt, roll or qw, qx, qy, qz; focal, cx, cy may be "
+                   "columns), interpolated to each frame (slerp). INPUT is then one video "
+                   "(mp4, mkv, avi, mov, webm, m4v; needs pip install 'gsrwt[video]').")
+@click.option("--time", "time_mode", type=click.Choice(VIDEO_TIME_MODES), default="relative",
+              show_default=True,
+              help="With --poses: the time column counts seconds from the first frame, or "
+                   "is on the video's own clock (absolute: pts x time_base).")
+@click.option("--max-pose-gap", type=Number(min=0), default=DEFAULT_MAX_POSE_GAP,
+              show_default=True,
+              help="With --poses: a frame further than this many seconds from every pose "
+                   "is an error row.")
+@click.option("--codec", type=click.Choice(VIDEO_CODEC_CHOICES), default="h264",
+              show_default=True,
+              help="With --poses: the output, OUTDIR/NAME.mp4 (h264), OUTDIR/NAME.mkv "
+                   "(ffv1, lossless) or OUTDIR/NAME/000000.png... (png); the input's "
+                   "timestamps kept. The table is OUTDIR/NAME.csv, a row per frame.")
 def rectify(inputs: tuple[str, ...], outdir: Path | Location, recursive: bool,
             sidecar: Path | Location | None, **options: Any) -> None:
     """Rectify images into canonical frontal views of the wall they show (GS-RWT).
@@ -549,6 +571,23 @@ def rectify(inputs: tuple[str, ...], outdir: Path | Location, recursive: bool,
           --sidecar sample_data/views/views.csv -o from-stdin
     """
     run = RunOptions.pop_from(options)
+    poses, time_mode = options.pop("poses"), options.pop("time_mode")
+    max_pose_gap, codec = options.pop("max_pose_gap"), options.pop("codec")
+    if poses is not None or any(is_video_name(text) for text in inputs if text != "-"):
+        from .videos import check_video_request, rectify_video  # videos only when given
+
+        check_video_request(inputs, poses, options["auto"], {
+            "--sidecar": sidecar is not None, "-r": recursive, "--scheduler": bool(
+                run.scheduler), "--shard": options["shard"] is not None,
+            "--ext": options["ext"] is not None, "--dry-run": options["dry_run"]})
+        settings, _ = settings_from_options(outdir, options)
+        table_path = options.pop("table_path")
+        table = table_from_options(outdir, table_path, None)
+        for name in ("auto", "min_confidence", "wall", "shard"):
+            options.pop(name)
+        rectify_video(inputs, outdir, poses, time_mode, max_pose_gap, codec, settings, table,
+                      table_path is not None, run, view_defaults(options))
+        return
     settings, extension = settings_from_options(outdir, options)
     table = table_from_options(outdir, options.pop("table_path"), options.pop("shard"))
     auto = options.pop("auto")
