@@ -26,6 +26,7 @@ from ..batch.video_jobs import VideoJob, output_of, remove_video_temporaries, ru
 from ..inputs.pose_log import PoseLog, load_pose_log
 from ..inputs.sidecar import SidecarError
 from ..inputs.videos import VIDEO_EXTENSIONS, VideoError, import_av, is_video_name
+from ..io.outputs import remove_stale_temporaries
 from ..io.storage import Location
 from ..io.targets import file_identity
 from ..tables.columns import VIDEO_COLUMNS
@@ -78,6 +79,24 @@ def _previous_rows(path: str, fmt: str, video: str) -> list[dict[str, Any]]:
     return [row for row in rows if row.get("image") == video]
 
 
+def _check_first_view(log: PoseLog, fallback: dict[str, Any], poses: str) -> None:
+    """A usage error when the pose file's first sample and the options make no view (no
+    focal length, say): every frame would fail alike."""
+    from ..geometry.rotations import pose_from_rotation
+    from ..inputs.records import RecordError, merge_values, view_from_values
+
+    first = min(log.samples, key=lambda sample: sample.time)
+    pose = pose_from_rotation(first.rotation)
+    values = merge_values({**first.numbers, "pan": pose.pan, "tilt": pose.tilt,
+                           "roll": pose.roll}, log.defaults, fallback)
+    try:
+        view_from_values(values, f"--poses {poses}")
+    except RecordError as error:
+        hint = (" (give --focal, or a focal column)" if error.field in ("focal", "fx")
+                or "focal" in error.reason else "")
+        raise InputError(f"{one_line(str(error), 300)}{hint}") from None
+
+
 def rectify_video(inputs: tuple[str, ...], outdir: Path | Location, poses: str,
                   time_mode: str, max_gap: float, codec: str, settings: Settings,
                   table: TableTarget, table_given: bool, run: RunOptions,
@@ -108,6 +127,9 @@ def rectify_video(inputs: tuple[str, ...], outdir: Path | Location, poses: str,
         log.timeline(max_gap)  # two samples at the same time: refused before any work
     except SidecarError as error:
         raise InputError(f"--poses {one_line(str(error), 400)}") from None
+    fallback = {name: value for name, value in view_kwargs.items()
+                if value is not None and not isinstance(value, bool)}
+    _check_first_view(log, fallback, poses)
     output = output_of(source, outdir, codec)
     if not table_given:
         default = str(outdir / f"{source.stem}.csv")
@@ -119,14 +141,14 @@ def rectify_video(inputs: tuple[str, ...], outdir: Path | Location, poses: str,
             raise InputError(f"{what} would overwrite an input; choose another")
     prepare_directory(outdir, f"-o {outdir}")
     prepare_table(table.path, "--table")
-    fallback = {name: value for name, value in view_kwargs.items()
-                if value is not None and not isinstance(value, bool)}
     words = made_with(dict(fallback), None, settings, ".png" if codec == "png" else
                       output.suffix) or ""
     words += (f" poses=sha256:{log.digest} time={time_mode} max_pose_gap={max_gap:g} "
               f"codec={codec}")
     job = VideoJob(source, output, codec, log, time_mode, max_gap, fallback, words.strip())
     remove_video_temporaries(job)
+    if table.path != "-":  # the table of a killed run
+        remove_stale_temporaries(Path(table.path).parent, names={Path(table.path).name})
     previous = _previous_rows(table.path if table.path != "-" else table.default,
                               table.format if table.path != "-" else "csv", str(source))
     counts, stopped = _run(job, settings, table, run, previous)

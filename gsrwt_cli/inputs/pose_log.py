@@ -70,10 +70,9 @@ class PoseLog:
         try:
             return Timeline(self.samples, max_gap)
         except DuplicateTimeError as error:
-            raise PoseLogError(
-                f"{self.wheres[error.second]}: time {error.time:g} is already given in "
-                f"{self.wheres[error.first]}"
-            ) from None
+            first = self.wheres[error.first].removeprefix(display_path(self.path) + " ")
+            raise PoseLogError(f"{self.wheres[error.second]}: time {error.time:g} is already "
+                               f"given in {first}") from None
 
 
 def _number(where: str, name: str, raw: Any) -> float:
