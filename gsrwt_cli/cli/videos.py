@@ -31,16 +31,8 @@ from ..io.storage import Location
 from ..io.targets import file_identity
 from ..tables.columns import VIDEO_COLUMNS
 from ..tables.writer import TableWriter, read_table
+from .batch_run import TableWriteError, Terminated, end_batch, open_table, stop_on_signals
 from .options import InputError, prepare_directory, prepare_table
-from .rectify import (
-    RunOptions,
-    TableTarget,
-    TableWriteError,
-    Terminated,
-    end_batch,
-    open_table,
-    stop_on_signals,
-)
 
 
 def video_inputs(inputs: tuple[str, ...]) -> list[str]:
@@ -99,7 +91,7 @@ def _check_first_view(log: PoseLog, fallback: dict[str, Any], poses: str) -> Non
 
 def rectify_video(inputs: tuple[str, ...], outdir: Path | Location, poses: str,
                   time_mode: str, max_gap: float, codec: str, settings: Settings,
-                  table: TableTarget, table_given: bool, run: RunOptions,
+                  table: Any, table_given: bool, run: Any,
                   view_kwargs: dict[str, Any]) -> None:
     """Check, run and end a video run (the command's exit status and last line)."""
     if isinstance(outdir, Location):
@@ -159,7 +151,7 @@ def rectify_video(inputs: tuple[str, ...], outdir: Path | Location, poses: str,
     end_batch(f"{summary}; output: {output}", where, stopped, counts.failed, run.quiet)
 
 
-def _run(job: VideoJob, settings: Settings, table: TableTarget, run: RunOptions,
+def _run(job: VideoJob, settings: Settings, table: Any, run: Any,
          previous: list[dict[str, Any]]) -> tuple[Counts, BaseException | None]:
     tqdm.monitor_interval = 0
     progress = tqdm(unit="frame", file=sys.stderr, dynamic_ncols=True,
