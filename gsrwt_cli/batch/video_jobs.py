@@ -36,7 +36,8 @@ from typing import Any
 
 import numpy as np
 
-from ..api.rectify import plan_image
+from ..api.rectify import plan_image, view_for_image
+from ..geometry.framing import steady_box
 from ..geometry.rotations import PoseError, pose_from_rotation
 from ..geometry.timeline import PoseGapError, Timeline
 from ..imaging.images import encode_image, warp_image
@@ -79,6 +80,8 @@ class VideoJob:
     max_gap: float = DEFAULT_MAX_POSE_GAP
     fallback: Mapping[str, Any] = field(default_factory=dict)
     made_with: str = ""
+    #: ``--steady``: every frame framed on the wall the first frame's default frame shows.
+    steady: bool = False
 
 
 @dataclass(frozen=True)
@@ -100,6 +103,8 @@ class FrameJob:
     error: str | None = None
     existed: bool = False
     record: Mapping[str, Any] | None = None
+    #: ``--steady``: the view values of the video's first frame, whose frame every frame keeps.
+    steady_from: Mapping[str, Any] | None = None
 
 
 def output_of(source: Path, outdir: Path, codec: str) -> Path:
@@ -136,7 +141,13 @@ def process_frame(job: FrameJob, settings: Settings, made_with: str) -> Row:
             row.update(params_row(view, job.image), focal_source=job.focal_source,
                        pose_source="poses")
             height, width = job.pixels.shape[:2]
-            plan = plan_image(view, width, height, settings.framing)
+            framing = settings.framing
+            if job.steady_from is not None:
+                first = view_for_image(view_from_values(job.steady_from, job.where), width,
+                                       height)
+                framing = replace(framing, bbox=steady_box(view_for_image(view, width, height),
+                                                           first))
+            plan = plan_image(view, width, height, framing)
             warped = warp_image(job.pixels, plan.pixel_map, settings.interpolation,
                                 settings.fill, settings.alpha, settings.antialias)
             status = "ok"
@@ -200,6 +211,7 @@ class _Decoding:
     frames: int = 0
     end_error: str | None = None
     pts: dict[int, int | None] = field(default_factory=dict)
+    steady_from: Mapping[str, Any] | None = None  # --steady: the first frame's values
 
 
 def _frame_values(job: VideoJob, timeline: Timeline, moment: float, index: int
@@ -367,6 +379,10 @@ def _run(job: VideoJob, settings: Settings, processes: int, reader: VideoReader,
             decoding.frames = item.index + 1
             decoding.pts[item.index] = item.pts
             made = _frame_job(job, item, timeline, png, recorded, settings, image)
+            if job.steady and made.error is None and made.values is not None:
+                if decoding.steady_from is None:
+                    decoding.steady_from = made.values
+                made = replace(made, steady_from=decoding.steady_from)
             jobs_out[item.index] = replace(made, pixels=None)
             yield made
 

@@ -465,6 +465,10 @@ def dask_executor(address: str, processes: int, retries: int,
               show_default=True,
               help="With --poses: a frame further than this many seconds from every pose "
                    "is an error row.")
+@click.option("--steady", is_flag=True,
+              help="With --poses: frame every frame on the wall the first frame's default "
+                   "frame shows, so that the wall stands still in the output (one focal "
+                   "length), instead of each frame's own default frame.")
 @click.option("--codec", type=click.Choice(VIDEO_CODEC_CHOICES), default="h264",
               show_default=True,
               help="With --poses: the output, OUTDIR/NAME.mp4 (h264), OUTDIR/NAME.mkv "
@@ -490,6 +494,7 @@ def rectify(inputs: tuple[str, ...], outdir: Path | Location, recursive: bool,
     run = RunOptions.pop_from(options)
     poses, time_mode = options.pop("poses"), options.pop("time_mode")
     max_pose_gap, codec = options.pop("max_pose_gap"), options.pop("codec")
+    steady = options.pop("steady")
     if poses is not None or any(is_video_name(text) for text in inputs if text != "-"):
         from .videos import check_video_request, rectify_video  # videos only when given
 
@@ -497,14 +502,19 @@ def rectify(inputs: tuple[str, ...], outdir: Path | Location, recursive: bool,
             "--sidecar": sidecar is not None, "-r": recursive, "--scheduler": bool(
                 run.scheduler), "--shard": options["shard"] is not None,
             "--ext": options["ext"] is not None, "--dry-run": options["dry_run"]})
+        if steady and options["bbox"] != "frontal":
+            raise click.UsageError("--steady keeps the first frame's default frame: it "
+                                   "needs --bbox frontal")
         settings, _ = settings_from_options(outdir, options)
         table_path = options.pop("table_path")
         table = table_from_options(outdir, table_path, None)
         for name in ("auto", "min_confidence", "wall", "shard"):
             options.pop(name)
         rectify_video(inputs, outdir, poses, time_mode, max_pose_gap, codec, settings, table,
-                      table_path is not None, run, view_defaults(options))
+                      table_path is not None, run, view_defaults(options), steady)
         return
+    if steady:
+        raise click.UsageError("--steady applies to a video (with --poses) only")
     settings, extension = settings_from_options(outdir, options)
     table = table_from_options(outdir, options.pop("table_path"), options.pop("shard"))
     auto = options.pop("auto")

@@ -92,7 +92,7 @@ def _check_first_view(log: PoseLog, fallback: dict[str, Any], poses: str) -> Non
 def rectify_video(inputs: tuple[str, ...], outdir: Path | Location, poses: str,
                   time_mode: str, max_gap: float, codec: str, settings: Settings,
                   table: Any, table_given: bool, run: Any,
-                  view_kwargs: dict[str, Any]) -> None:
+                  view_kwargs: dict[str, Any], steady: bool = False) -> None:
     """Check, run and end a video run (the command's exit status and last line)."""
     if isinstance(outdir, Location):
         raise InputError(f"-o {outdir}: videos are written to a local directory only")
@@ -136,8 +136,9 @@ def rectify_video(inputs: tuple[str, ...], outdir: Path | Location, poses: str,
     words = made_with(dict(fallback), None, settings, ".png" if codec == "png" else
                       output.suffix) or ""
     words += (f" poses=sha256:{log.digest} time={time_mode} max_pose_gap={max_gap:g} "
-              f"codec={codec}")
-    job = VideoJob(source, output, codec, log, time_mode, max_gap, fallback, words.strip())
+              f"codec={codec}" + (" steady=on" if steady else ""))
+    job = VideoJob(source, output, codec, log, time_mode, max_gap, fallback, words.strip(),
+                   steady)
     remove_video_temporaries(job)
     if table.path != "-":  # the table of a killed run
         remove_stale_temporaries(Path(table.path).parent, names={Path(table.path).name})

@@ -239,3 +239,31 @@ def test_killed_mid_video_leaves_no_file_and_a_rerun_completes(tmp_path: Path, s
     assert result.returncode == 0, result.stderr
     assert len(read_video(out / "long.mkv")[0]) == 150
     assert not [p for p in out.iterdir() if p.name.endswith(".part")]
+
+
+def test_steady_keeps_the_wall_still(tmp_path: Path, sweep_video) -> None:
+    """With --steady every frame shows the wall the first frame's default frame shows: the
+    same wall point at the same output pixel, frame after frame (without it, the frame
+    follows the optical axis and the wall moves)."""
+    video, log = sweep_video
+    outputs = {}
+    for steady in ((), ("--steady",)):
+        out = tmp_path / ("steady" if steady else "moving")
+        result = run_gsrwt("rectify", video, "--poses", log, "--focal", FOCAL, "--codec", "png",
+                           "-o", out, "-j", "1", *steady)
+        assert result.returncode == 0, result.stderr
+        outputs[bool(steady)] = [cv2.imread(str(out / "walk" / f"{index:06d}.png"))
+                                 for index in range(COUNT)]
+    for steady, frames in outputs.items():
+        first = frames[0]
+        for index in (4, 8, 12):
+            mask = first.any(axis=2) & frames[index].any(axis=2)
+            assert mask.mean() > 0.3
+            if steady:
+                assert psnr(frames[index], first, mask) >= 28, index
+            else:
+                assert psnr(frames[index], first, mask) < 20, index
+    np.testing.assert_array_equal(outputs[True][0], outputs[False][0])
+    refused = run_gsrwt("rectify", video, "--poses", log, "--focal", FOCAL, "--steady",
+                        "--bbox", "full", "-o", tmp_path / "x")
+    assert refused.returncode == 2 and "needs --bbox frontal" in refused.stderr
