@@ -28,6 +28,8 @@ import contextlib
 import math
 import multiprocessing
 import os
+import queue
+import threading
 import warnings
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field, replace
@@ -316,24 +318,24 @@ def _run_encoded(job: VideoJob, settings: Settings, processes: int, reader: Vide
             encoder = VideoEncoder(handle, VIDEO_CODECS[job.codec], reader.info.time_base,
                                    reader.info.rate)
             decoding = _Decoding()
+            writer = _EncoderThread(encoder, (VideoEncodeError, ValueError))
 
             def encode(row: Row) -> None:
                 pixels = row.pop("_pixels", None)
+                pts = decoding.pts.pop(row.get("frame"), None)
                 if pixels is not None and row["status"] == "ok":
-                    pts = decoding.pts.get(row["frame"])
-                    try:
-                        encoder.write(pixels, pts if pts is not None else row["frame"])
-                    except (VideoEncodeError, ValueError) as error:
-                        row.update(status="error", error=error_text(error))
+                    writer.put(row, pixels, pts if pts is not None else row["frame"])
                 held.append(row)
 
             try:
                 _run(job, settings, processes, reader, timeline, encode, on_progress, (),
                      context, decoding)
+                writer.finish()
                 if encoder.frames == 0:
                     raise _NothingWrittenError
                 encoder.close()
             except BaseException:
+                writer.finish(drop=True)
                 encoder.abandon()
                 raise
     except _NothingWrittenError:
@@ -352,6 +354,56 @@ def _run_encoded(job: VideoJob, settings: Settings, processes: int, reader: Vide
         return
     for row in held:
         deliver(row)
+
+
+#: Frames waiting for the encoder's thread (each a warped frame in memory).
+ENCODE_AHEAD = 4
+
+
+class _EncoderThread:
+    """The encoder in a thread of its own (PyAV lets go of the GIL while FFmpeg encodes), so
+    that decoding and the workers' results go on while a frame is encoded; at most
+    :data:`ENCODE_AHEAD` frames wait. A frame the encoder refuses (one of ``refused``) makes
+    its row an ``error``."""
+
+    def __init__(self, encoder: Any, refused: tuple[type[BaseException], ...]) -> None:
+        self.encoder = encoder
+        self.refused = refused
+        self.frames: queue.Queue[tuple[Row, np.ndarray, int] | None] = queue.Queue(
+            ENCODE_AHEAD)
+        self.failure: BaseException | None = None
+        self.drop = False
+        self.thread = threading.Thread(target=self._run, daemon=True)
+        self.thread.start()
+
+    def _run(self) -> None:
+        while True:
+            item = self.frames.get()
+            if item is None:
+                return
+            row, pixels, pts = item
+            if self.drop or self.failure is not None:
+                continue
+            try:
+                self.encoder.write(pixels, pts)
+            except self.refused as error:
+                row.update(status="error", error=error_text(error))
+            except Exception as error:  # the file cannot be finished: reported by finish
+                self.failure = error
+
+    def put(self, row: Row, pixels: np.ndarray, pts: int) -> None:
+        if self.failure is not None:
+            raise self.failure
+        self.frames.put((row, pixels, pts))
+
+    def finish(self, drop: bool = False) -> None:
+        """Wait for the frames queued (``drop``: throw them away) and end the thread;
+        raises what stopped the encoder, if anything did."""
+        self.drop = self.drop or drop
+        self.frames.put(None)
+        self.thread.join()
+        if self.failure is not None and not drop:
+            raise self.failure
 
 
 def _run(job: VideoJob, settings: Settings, processes: int, reader: VideoReader,

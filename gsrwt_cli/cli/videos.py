@@ -11,6 +11,7 @@ from __future__ import annotations
 import contextlib
 import csv
 import math
+import os
 import sys
 from dataclasses import replace
 from pathlib import Path
@@ -144,6 +145,11 @@ def rectify_video(inputs: tuple[str, ...], outdir: Path | Location, poses: str,
         remove_stale_temporaries(Path(table.path).parent, names={Path(table.path).name})
     previous = _previous_rows(table.path if table.path != "-" else table.default,
                               table.format if table.path != "-" else "csv", str(source))
+    if click.get_current_context().params.get("jobs") is None:
+        # The main process decodes and encodes (its own core); the workers take the rest.
+        # On two cores, warping in the main process beside the encoder's thread is fastest
+        # (benchmarks/bench_video.py: 1.32 against 1.46 times PyAV alone with two workers).
+        run = replace(run, jobs=max(1, (os.cpu_count() or 1) - 1))
     counts, stopped = _run(job, settings, table, run, previous)
     summary = f"{counts.ok} frames ok, {counts.skipped} skipped, {counts.failed} failed"
     if stopped is not None:
