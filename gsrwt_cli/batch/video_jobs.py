@@ -338,7 +338,7 @@ def _run_encoded(job: VideoJob, settings: Settings, processes: int, reader: Vide
                 writer.finish(drop=True)
                 encoder.abandon()
                 raise
-    except _NothingWrittenError:
+    except _NothingWrittenError:  # every frame failed: their rows, and no file
         pass
     except BaseException as stop:
         failed = isinstance(stop, Exception)
