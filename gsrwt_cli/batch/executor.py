@@ -23,10 +23,12 @@ from __future__ import annotations
 import contextlib
 import ctypes
 import multiprocessing
+import queue
 import signal
 import sys
+import threading
 from collections import deque
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass, field
 from multiprocessing.connection import Connection, wait
 from typing import Any, Generic, Protocol, TypeVar
@@ -204,6 +206,101 @@ class ProcessExecutor(Generic[Item, Result]):
         finally:
             self._stop(workers, items)
 
+    def map_stream(self, items: Iterable[Item], window: int | None = None
+                   ) -> Iterator[tuple[int, Result]]:
+        """``(index, result)`` for every item of an iterable taken as workers have room (a
+        video's frames, decoded as they are needed), as they complete.
+
+        At most :data:`ITEMS_IN_FLIGHT` items are in flight per worker, and no item is taken
+        more than ``window`` (default: twice that per worker) after the oldest whose result has
+        not been yielded, so that a caller putting results back in order holds a bounded
+        number of them. Items are dropped once their result is out.
+        """
+        window = window or ITEMS_IN_FLIGHT * self.processes
+        source = iter(items)
+        held: dict[int, Item] = {}  # taken, result not yet out
+        queue: deque[int] = deque()  # taken, not yet sent (put back after a death)
+        taken = 0
+        exhausted = False
+        workers: list[_Worker] = []
+
+        def take() -> bool:
+            nonlocal taken, exhausted
+            if queue:
+                return True
+            if exhausted or (held and taken - min(held) >= window):
+                return False
+            try:
+                item = next(source)
+            except StopIteration:
+                exhausted = True
+                return False
+            held[taken] = item
+            queue.append(taken)
+            taken += 1
+            return True
+
+        senders: dict[int, _Sender] = {}
+
+        def dispatch(worker: _Worker, up_to: int = ITEMS_IN_FLIGHT) -> None:
+            # Sent by a thread: a large item (a frame) would fill the pipe while the worker
+            # is itself blocked sending its large result back, and neither would read.
+            sender = senders.get(id(worker))
+            if sender is None:
+                sender = senders[id(worker)] = _Sender(worker.connection)
+            while len(worker.in_flight) < up_to and take():
+                index = queue.popleft()
+                worker.in_flight.append(index)
+                sender.send(held[index])
+
+        try:
+            if not take():
+                return
+            for _ in range(self.processes):
+                workers.append(self._start())
+            for up_to in range(1, ITEMS_IN_FLIGHT + 1):
+                for worker in workers:
+                    dispatch(worker, up_to)
+            while any(worker.in_flight for worker in workers):
+                busy = [worker for worker in workers if worker.in_flight]
+                ready = set(wait([w.connection for w in busy] + [w.process.sentinel for w in busy]))
+                for worker in busy:
+                    index = worker.in_flight[0]
+                    if worker.connection in ready or worker.connection.poll():
+                        try:
+                            result = worker.connection.recv()
+                        except (EOFError, OSError):
+                            result = None
+                        else:
+                            worker.in_flight.popleft()
+                            del held[index]
+                            yield index, result
+                            for other in workers:
+                                dispatch(other)
+                            continue
+                    if worker.connection in ready or worker.process.sentinel in ready:
+                        worker.process.join(STOP_GRACE_SECONDS)
+                        reason = death_reason(worker.process.exitcode)
+                        self.deaths += 1
+                        if self.on_abandon is not None and worker.process.pid is not None:
+                            self.on_abandon(held[index], worker.process.pid)
+                        senders.pop(id(worker)).close()
+                        worker.connection.close()
+                        workers.remove(worker)
+                        worker.in_flight.popleft()
+                        queue.extendleft(reversed(worker.in_flight))
+                        item = held.pop(index)
+                        yield index, self.on_death(item, reason)
+                        workers.append(self._start())
+                        for other in workers:
+                            dispatch(other)
+        finally:
+            for sender in senders.values():
+                sender.close()
+            self._stop(workers, _Held(held))  # a sender blocked on a pipe: its worker ends
+            for sender in senders.values():
+                sender.thread.join(STOP_GRACE_SECONDS)
+
     def _stop(self, workers: list[_Worker], items: Sequence[Item]) -> None:
         """End every worker: politely if idle, with SIGTERM (then SIGKILL) if busy."""
         for worker in workers:
@@ -222,3 +319,42 @@ class ProcessExecutor(Generic[Item, Result]):
                 for index in worker.in_flight:
                     self.on_abandon(items[index], pid)
             worker.connection.close()
+
+
+class _Held(Sequence):  # type: ignore[type-arg]
+    """The items :meth:`ProcessExecutor.map_stream` holds, by index, for :meth:`_stop`."""
+
+    def __init__(self, held: dict[int, Any]) -> None:
+        self.held = held
+
+    def __getitem__(self, index: Any) -> Any:
+        return self.held[index]
+
+    def __len__(self) -> int:
+        return len(self.held)
+
+
+class _Sender:
+    """Items sent to one worker's pipe by a thread of their own, in order."""
+
+    def __init__(self, connection: Connection) -> None:
+        self.connection = connection
+        self.items: queue.SimpleQueue[Any] = queue.SimpleQueue()
+        self.thread = threading.Thread(target=self._run, daemon=True)
+        self.thread.start()
+
+    def _run(self) -> None:
+        while True:
+            item = self.items.get()
+            if item is _Sender:
+                return
+            # A worker that died breaks the pipe: its sentinel reports the death.
+            with contextlib.suppress(OSError, ValueError):
+                self.connection.send(item)
+
+    def send(self, item: Any) -> None:
+        self.items.put(item)
+
+    def close(self) -> None:
+        """Stop once the items queued are sent (or their pipe is broken)."""
+        self.items.put(_Sender)

@@ -11,20 +11,16 @@ the core's errors in terms of those options.
 
 from __future__ import annotations
 
-import _thread
 import contextlib
 import csv
 import io
 import math
 import os
-import signal
 import sys
-import threading
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path, PurePosixPath
-from types import FrameType
-from typing import IO, Any
+from typing import Any
 
 import click
 from tqdm import tqdm
@@ -48,6 +44,9 @@ from ..batch.rectify_jobs import (
     settings_for_elsewhere,
     worker_context,
 )
+from ..batch.video_jobs import CODEC_CHOICES as VIDEO_CODEC_CHOICES
+from ..batch.video_jobs import DEFAULT_MAX_POSE_GAP
+from ..batch.video_jobs import TIME_MODES as VIDEO_TIME_MODES
 from ..geometry.framing import (
     EmptyOutputError,
     FrameOutsideImageError,
@@ -71,11 +70,19 @@ from ..inputs.sources import (
     sources_from_directory,
     sources_from_location,
 )
-from ..io.outputs import open_atomic, remove_stale_temporaries
+from ..inputs.videos import is_video_name
+from ..io.outputs import remove_stale_temporaries
 from ..io.storage import Location, location
 from ..io.targets import file_identity, protected_files
 from ..tables.shards import parse_shard, shard_slice, shard_table_name
 from ..tables.writer import TableWriter, format_from_extension, read_table
+from .batch_run import (  # noqa: F401  (named here too: estimate and the tests take them)
+    TableWriteError,
+    Terminated,
+    end_batch,
+    open_table,
+    stop_on_signals,
+)
 from .options import (
     InputError,
     Integer,
@@ -355,92 +362,6 @@ class RectifyWording:
                 f"raise --max-stretch{below_one}, or use --bbox frontal")
 
 
-class TableWriteError(Exception):
-    """The table could not be written (a full disk, say): the run cannot keep its record."""
-
-
-class Terminated(BaseException):
-    """SIGTERM, raised in the main process like KeyboardInterrupt is for SIGINT."""
-
-
-def end_batch(summary: str, where: str, stopped: BaseException | None, failed: int,
-              quiet: bool) -> None:
-    """A batch command's last line on stderr (``gsrwt: SUMMARY; table: ...``, unless
-    ``quiet``) and its exit status: 130 or 143 if ``stopped`` by SIGINT or SIGTERM (the line
-    then starts ``interrupted:``; ``summary`` says what was not done), 1 if some failed."""
-    if not quiet:
-        click.echo(f"gsrwt: {'interrupted: ' if stopped is not None else ''}{summary}{where}",
-                   err=True)
-    if stopped is not None:
-        sys.exit(143 if isinstance(stopped, Terminated) else 130)
-    if failed:
-        sys.exit(1)
-
-
-def _inside_a_dask_client_call(frame: FrameType | None) -> bool:
-    """Whether ``frame`` (the main thread's, when a signal came) is inside a blocking call of
-    a Dask client (``distributed.utils.sync``). An exception raised there before the call's
-    coroutine has started makes distributed log a ``NameError`` traceback (its ``sync``
-    cancels a future it has not made yet), so a stop waits until such a call returns."""
-    if "distributed.utils" not in sys.modules:
-        return False
-    while frame is not None:
-        if frame.f_code.co_name == "sync" and frame.f_globals.get("__name__") == (
-                "distributed.utils"):
-            return True
-        frame = frame.f_back
-    return False
-
-
-@contextlib.contextmanager
-def stop_on_signals() -> Iterator[None]:
-    """SIGINT raises KeyboardInterrupt and SIGTERM raises :class:`Terminated`, once, in the
-    main thread, outside any Dask client call (:func:`_inside_a_dask_client_call`).
-
-    After the first, both are ignored until the block ends, so that the table of what
-    finished is written whole even if the user presses Ctrl-C again.
-    """
-
-    def stop(signum: int, frame: FrameType | None) -> None:
-        if _inside_a_dask_client_call(frame):
-            # Delivered again in 50 ms, until the call has returned.
-            threading.Timer(0.05, _thread.interrupt_main, args=(signum,)).start()
-            return
-        signal.signal(signal.SIGINT, signal.SIG_IGN)
-        signal.signal(signal.SIGTERM, signal.SIG_IGN)
-        raise KeyboardInterrupt if signum == signal.SIGINT else Terminated
-
-    saved = {number: signal.getsignal(number) for number in (signal.SIGINT, signal.SIGTERM)}
-    for number in saved:
-        signal.signal(number, stop)
-    try:
-        yield
-    finally:
-        for number, handler in saved.items():
-            signal.signal(number, handler)
-
-
-@contextlib.contextmanager
-def open_table(path: str) -> Iterator[IO[str]]:
-    """The table's stream: stdout for ``-``, else a file that appears whole at the end.
-
-    File names that are not UTF-8 are written as their own bytes (``surrogateescape``).
-    """
-    if path == "-":
-        yield sys.stdout
-        return
-    finished = False
-    try:
-        with open_atomic(location(path), "w", encoding="utf-8", errors="surrogateescape",
-                         newline="") as stream:
-            yield stream
-            finished = True
-    except OSError as error:
-        if not finished:
-            raise
-        raise TableWriteError(error.strerror or str(error)) from None  # flushing at the end
-
-
 @contextlib.contextmanager
 def dask_executor(address: str, processes: int, retries: int,
                   settings: Settings) -> Iterator[Any]:
@@ -556,6 +477,28 @@ def dask_executor(address: str, processes: int, retries: int,
               help="With --auto: the wall to rectify is the vertical plane with the most "
                    "horizontal edges (the surface the photo shows) or the most frontal one "
                    "(|pan| <= 45, as 'gsrwt estimate' reports poses).")
+@click.option("--poses", default=None, type=click.Path(dir_okay=False),
+              help="A video's poses: a CSV or YAML file of a time and a pose per row (time "
+                   "in seconds; pan, tilt, roll or qw, qx, qy, qz; focal, cx, cy may be "
+                   "columns), interpolated to each frame (slerp). INPUT is then one video "
+                   "(mp4, mkv, avi, mov, webm, m4v; needs pip install 'gsrwt[video]').")
+@click.option("--time", "time_mode", type=click.Choice(VIDEO_TIME_MODES), default="relative",
+              show_default=True,
+              help="With --poses: the time column counts seconds from the first frame, or "
+                   "is on the video's own clock (absolute: pts x time_base).")
+@click.option("--max-pose-gap", type=Number(min=0), default=DEFAULT_MAX_POSE_GAP,
+              show_default=True,
+              help="With --poses: a frame further than this many seconds from every pose "
+                   "is an error row.")
+@click.option("--steady", is_flag=True,
+              help="With --poses: frame every frame on the wall the first frame's default "
+                   "frame shows, so that the wall stands still in the output (one focal "
+                   "length), instead of each frame's own default frame.")
+@click.option("--codec", type=click.Choice(VIDEO_CODEC_CHOICES), default="h264",
+              show_default=True,
+              help="With --poses: the output, OUTDIR/NAME.mp4 (h264), OUTDIR/NAME.mkv "
+                   "(ffv1, lossless) or OUTDIR/NAME/000000.png... (png); the input's "
+                   "timestamps kept. The table is OUTDIR/NAME.csv, a row per frame.")
 def rectify(inputs: tuple[str, ...], outdir: Path | Location, recursive: bool,
             sidecar: Path | Location | None, **options: Any) -> None:
     """Rectify images into canonical frontal views of the wall they show (GS-RWT).
@@ -574,6 +517,29 @@ def rectify(inputs: tuple[str, ...], outdir: Path | Location, recursive: bool,
           --sidecar sample_data/views/views.csv -o from-stdin
     """
     run = RunOptions.pop_from(options)
+    poses, time_mode = options.pop("poses"), options.pop("time_mode")
+    max_pose_gap, codec = options.pop("max_pose_gap"), options.pop("codec")
+    steady = options.pop("steady")
+    if poses is not None or any(is_video_name(text) for text in inputs if text != "-"):
+        from .videos import check_video_request, rectify_video  # videos only when given
+
+        check_video_request(inputs, poses, options["auto"], {
+            "--sidecar": sidecar is not None, "-r": recursive, "--scheduler": bool(
+                run.scheduler), "--shard": options["shard"] is not None,
+            "--ext": options["ext"] is not None, "--dry-run": options["dry_run"]})
+        if steady and options["bbox"] != "frontal":
+            raise click.UsageError("--steady keeps the first frame's default frame: it "
+                                   "needs --bbox frontal")
+        settings, _ = settings_from_options(outdir, options)
+        table_path = options.pop("table_path")
+        table = table_from_options(outdir, table_path, None)
+        for name in ("auto", "min_confidence", "wall", "shard"):
+            options.pop(name)
+        rectify_video(inputs, outdir, poses, time_mode, max_pose_gap, codec, settings, table,
+                      table_path is not None, run, view_defaults(options), steady)
+        return
+    if steady:
+        raise click.UsageError("--steady applies to a video (with --poses) only")
     settings, extension = settings_from_options(outdir, options)
     table = table_from_options(outdir, options.pop("table_path"), options.pop("shard"))
     auto = options.pop("auto")

@@ -17,6 +17,7 @@ from .camera import View
 from .gsrwt import Matrix, local_stretch, map_points
 from .lens import LensDistortion
 from .pixelmap import PixelMap
+from .rotations import rotation_from_pose
 
 
 def canonical_from_pixel(view: View) -> Matrix:
@@ -157,6 +158,38 @@ def corners_frame(view: View, corners: np.ndarray, margin_percent: float = 0.0,
 def default_frame(view: View, scale: float = 1.0) -> Frame:
     """The thesis's bounding box (Fig. 5.7): the input's size at frontal resolution."""
     return Frame(0.0, 0.0, float(view.width), float(view.height), scale)
+
+
+def wall_foot_canonical(view: View) -> np.ndarray:
+    """``(U, V)`` of the wall point straight ahead of the camera's centre (where the optical
+    axis of pan = tilt = 0 meets the wall) in this view's canonical coordinates.
+
+    Canonical coordinates of one view and another differ by a shift (Eq. 4.22's shift
+    depends on the pose); less this point's, they are the wall's own, ``f / Zc`` per wall
+    unit, the same in every view of one focal length (checked against an independent
+    camera in the tests).
+    """
+    # The wall's normal seen from the camera without its roll: (Rx(pan) Ry(tilt))^T z.
+    direction = rotation_from_pose(view.pan, view.tilt).T @ np.array([0.0, 0.0, 1.0])
+    image = view.focal * direction[:2] / direction[2]
+    return map_points(view.parameters.canonical_from_image(), [image])[0]
+
+
+def steady_box(view: View, first: View) -> tuple[float, float, float, float]:
+    """The box of ``view``'s default frame (``X0, Y0, X1, Y1``, default-frame pixel edges)
+    that shows the wall ``first``'s default frame shows: a video whose frames are all framed
+    so keeps the wall still (``rectify --steady``), when the focal length stays the same.
+
+    A default-frame pixel ``(col, row)`` shows canonical ``U = row - cy + u0``,
+    ``V = v0 - (col - cx)`` (``u0, v0`` the optical axis' point); the same wall point is at
+    canonical ``U - F1 + Fv`` in the other view (``F``: :func:`wall_foot_canonical`).
+    """
+    u1, v1 = optical_axis_canonical(first)
+    uv, vv = optical_axis_canonical(view)
+    f1, fv = wall_foot_canonical(first), wall_foot_canonical(view)
+    dcol = (view.cx - first.cx) + (vv - fv[1]) - (v1 - f1[1])
+    drow = (view.cy - first.cy) + (fv[0] - uv) - (f1[0] - u1)
+    return (float(dcol), float(drow), float(dcol + first.width), float(drow + first.height))
 
 
 def full_frame(

@@ -21,6 +21,11 @@ RECTIFY_COLUMNS = (
     "out_width", "out_height", "scale", "homography", "made_with", "status", "error",
 )
 
+#: ``gsrwt rectify VIDEO --poses FILE``: one row per frame, the rectify table's columns with
+#: the frame's index (``frame``, from 0) and ``time`` (seconds from the first frame) after
+#: ``image`` (the video). Still images keep :data:`RECTIFY_COLUMNS`.
+VIDEO_COLUMNS = (RECTIFY_COLUMNS[0], "frame", "time", *RECTIFY_COLUMNS[1:])
+
 #: Where a rectify row's focal length and pose came from (``focal_source``, ``pose_source``),
 #: and the statuses of its rows.
 FOCAL_SOURCES = ("option", "sidecar", "camera", "exif", "estimated")

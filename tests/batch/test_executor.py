@@ -43,3 +43,44 @@ def test_every_item_once_when_workers_die_with_items_queued_behind(processes):
             assert results[item][0] == item * item
     if processes > 1:  # the work was shared
         assert len({result[1] for item, result in results.items() if item not in deadly}) > 1
+
+
+def _make_frame_worker(deadly: frozenset[int]):
+    def work(item: tuple[int, bytes]) -> tuple[int, int]:
+        index, payload = item
+        if index in deadly:
+            os.kill(os.getpid(), signal.SIGKILL)
+        return index, len(payload)  # a frame's worth back is sent by the video worker
+    return work
+
+
+@pytest.mark.parametrize("processes", [1, 2])
+def test_a_stream_of_large_items_with_deaths_and_a_bounded_window(processes):
+    """``map_stream`` takes items from an iterator only as workers have room and the
+    window allows (a video's frames, decoded as needed): large items both ways never
+    deadlock the pipes, a death costs its item only, and no more than ``window`` items
+    are ever taken ahead of the oldest result not out."""
+    taken: list[int] = []
+    out: set[int] = set()
+    window = ITEMS_IN_FLIGHT * processes
+    deadly = frozenset({5, 6, 23})
+    ahead: list[int] = []
+
+    def frames():
+        for index in range(40):
+            taken.append(index)
+            ahead.append(index - min(set(range(40)) - out))
+            yield index, bytes(600_000)  # larger than a pipe's buffer
+
+    executor = ProcessExecutor(
+        _make_frame_worker, (deadly,), processes,
+        on_death=lambda item, reason: ("died", item[0]),
+        context=multiprocessing.get_context("forkserver"))
+    results = {}
+    for index, result in executor.map_stream(frames(), window):
+        results[index] = result
+        out.add(index)
+    assert sorted(results) == list(range(40)) and taken == list(range(40))
+    for index, result in results.items():
+        assert result == (("died", index) if index in deadly else (index, 600_000))
+    assert max(ahead) < window

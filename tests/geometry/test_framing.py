@@ -27,7 +27,9 @@ from gsrwt_cli.geometry.framing import (
     OutputTooLargeError,
     fit_frame,
     plan_output,
+    steady_box,
 )
+from gsrwt_cli.geometry.gsrwt import map_points
 from tests.helpers.camera import camera_axes, project_wall_points
 
 #: Camera to wall, in wall units: it cancels from every pixel relation below.
@@ -228,3 +230,21 @@ def test_nothing_within_the_stretch_says_which_reason():
     wide = plan_output(oblique, Framing(bbox="full", max_stretch=4.0))
     assert narrow.size[0] * narrow.size[1] < wide.size[0] * wide.size[1]
     assert math.isfinite(wide.frame.x1)
+
+
+def test_steady_box_puts_a_wall_point_where_the_first_view_put_it():
+    """``steady_box``: a wall point lands on the same output pixel in every view of one
+    focal length (the independent camera projects it), roll and principal points apart."""
+    wall = np.array([[1.0, 0.5], [2.0, -1.0], [-0.5, 0.2]])
+    first = View(pan=5, tilt=15, focal=300, cx=160, cy=120, width=320, height=240)
+    expected = None
+    for pan, tilt, roll, cx in [(5, 15, 0, 160), (12, 22, 1, 150), (-8, 18, -2, 170)]:
+        view = View(pan=pan, tilt=tilt, roll=roll, focal=300, cx=cx, cy=120, width=320,
+                    height=240)
+        plan = plan_output(view, Framing(bbox=steady_box(view, first)))
+        pixels, _ = project_wall_points(wall, 10.0, pan, tilt, 300, cx, 120, roll)
+        landed = map_points(plan.homography, pixels)
+        if expected is None:
+            expected = landed
+        np.testing.assert_allclose(landed, expected, atol=1e-6)
+        assert plan.size == (320, 240)

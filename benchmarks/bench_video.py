@@ -1,0 +1,137 @@
+"""Throughput of ``gsrwt rectify VIDEO --poses FILE`` against PyAV alone.
+
+A 640x480, 30 frames/s H.264 clip is made from renders of a textured wall seen by a camera
+sweeping in pan and tilt (libx264, CRF 18), with a pose log of one sample every five frames.
+Two pipelines over it, each a process of its own, timed wall-clock:
+
+- ``gsrwt``: the real command, ``gsrwt rectify clip.mp4 --poses poses.csv --codec h264
+  --jobs P`` (decoding and encoding in the main process, warping on P workers);
+- ``floor``: PyAV alone, decoding the clip and encoding every frame again with the same
+  encoder and options (libx264, CRF 18, preset veryfast, yuv420p), no warp.
+
+It prints frames per second of both and the ratio gsrwt/floor (goal: at most 1.3).
+
+    python benchmarks/bench_video.py [--frames 300] [--jobs N] [--repeat 3]
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+WIDTH, HEIGHT, FOCAL, RATE = 640, 480, 600.0, 30
+
+
+def make_clip(folder: Path, frames: int) -> tuple[Path, Path]:
+    """The clip (rendered by OpenCV's projection of a textured wall) and its pose log."""
+    import av
+
+    rng = np.random.default_rng(0)
+    texture = cv2.GaussianBlur(rng.integers(0, 255, (1600, 2000, 3)).astype(np.uint8),
+                               (0, 0), 1.5)
+    clip, log = folder / "clip.mp4", folder / "poses.csv"
+    rows = ["time,pan,tilt"]
+    k = np.array([[FOCAL, 0, WIDTH / 2], [0, FOCAL, HEIGHT / 2], [0, 0, 1]])
+    # The wall: texture pixels at 1 unit per pixel, 1000 units in front of the camera.
+    th, tw = texture.shape[:2]
+    corners = np.array([[-tw / 2, -th / 2, 1000], [tw / 2, -th / 2, 1000],
+                        [tw / 2, th / 2, 1000], [-tw / 2, th / 2, 1000]], dtype=np.float64)
+    source = np.array([[0, 0], [tw, 0], [tw, th], [0, th]], dtype=np.float32)
+    with av.open(str(clip), mode="w") as container:
+        stream = container.add_stream("libx264", rate=RATE,
+                                      options={"crf": "18", "preset": "veryfast"})
+        stream.width, stream.height, stream.pix_fmt = WIDTH, HEIGHT, "yuv420p"
+        for index in range(frames):
+            t = index / RATE
+            pan, tilt = 20 * np.sin(t), 10 + 10 * np.sin(0.7 * t)
+            if index % 5 == 0:
+                rows.append(f"{float(t)!r},{float(pan)!r},{float(tilt)!r}")
+            # OpenCV's camera: turned by pan about the vertical (y) and tilt about x.
+            rvec = cv2.Rodrigues(cv2.Rodrigues(np.array([np.radians(tilt), 0.0, 0.0]))[0]
+                                 @ cv2.Rodrigues(np.array([0.0, -np.radians(pan), 0.0]))[0]
+                                 )[0]
+            points, _ = cv2.projectPoints(corners, rvec, np.zeros(3), k, None)
+            homography = cv2.getPerspectiveTransform(source, points.reshape(4, 2)
+                                                     .astype(np.float32))
+            image = cv2.warpPerspective(texture, homography, (WIDTH, HEIGHT))
+            frame = av.VideoFrame.from_ndarray(image, format="bgr24")
+            frame.pts = index
+            for packet in stream.encode(frame):
+                container.mux(packet)
+        for packet in stream.encode():
+            container.mux(packet)
+    log.write_text("\n".join(rows) + "\n")
+    return clip, log
+
+
+FLOOR = r"""
+import sys, av
+source, target = sys.argv[1], sys.argv[2]
+with av.open(source) as inp, av.open(target, mode="w") as out:
+    video = inp.streams.video[0]
+    video.thread_type = "SLICE"
+    stream = out.add_stream("libx264", rate=video.average_rate,
+                            options={"crf": "18", "preset": "veryfast"})
+    stream.width, stream.height, stream.pix_fmt = video.width, video.height, "yuv420p"
+    stream.time_base = video.time_base
+    for frame in inp.decode(video):
+        image = frame.to_ndarray(format="bgr24")
+        again = av.VideoFrame.from_ndarray(image, format="bgr24")
+        again.pts, again.time_base = frame.pts, frame.time_base
+        for packet in stream.encode(again):
+            out.mux(packet)
+    for packet in stream.encode():
+        out.mux(packet)
+"""
+
+
+def timed(command: list[str]) -> tuple[float, float]:
+    """Wall-clock seconds of ``command``, and the CPU seconds of its process tree."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    start = time.perf_counter()
+    result = subprocess.run(command, capture_output=True, text=True)
+    if result.returncode:
+        raise SystemExit(f"{command[0]} failed: {result.stderr.strip()}")
+    wall = time.perf_counter() - start
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return wall, (after.ru_utime + after.ru_stime) - (before.ru_utime + before.ru_stime)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--frames", type=int, default=300)
+    parser.add_argument("--jobs", type=int, default=os.cpu_count() or 1)
+    parser.add_argument("--repeat", type=int, default=3)
+    args = parser.parse_args()
+    gsrwt = Path(sys.executable).with_name("gsrwt")
+    with tempfile.TemporaryDirectory() as folder:
+        clip, log = make_clip(Path(folder), args.frames)
+        best = {"gsrwt": (math.inf, math.inf), "floor": (math.inf, math.inf)}
+        for repeat in range(args.repeat):
+            out = Path(folder) / f"out{repeat}"
+            best["gsrwt"] = min(best["gsrwt"], timed(
+                [str(gsrwt), "rectify", str(clip), "--poses", str(log), "--focal", str(FOCAL),
+                 "--codec", "h264", "-o", str(out), "-j", str(args.jobs), "-q"]))
+            best["floor"] = min(best["floor"], timed(
+                [sys.executable, "-c", FLOOR, str(clip), str(Path(folder) / "floor.mp4")]))
+    for name, (seconds, cpu) in best.items():
+        print(f"{name:6s} {seconds:6.2f} s  {args.frames / seconds:6.1f} frames/s  "
+              f"(CPU {cpu:.2f} s)")
+    print(f"gsrwt/floor {best['gsrwt'][0] / best['floor'][0]:.2f} wall-clock (goal: at most "
+          f"1.3), {best['gsrwt'][1] / best['floor'][1]:.2f} in CPU time; "
+          f"{args.frames} frames of {WIDTH}x{HEIGHT}, {args.jobs} workers, "
+          f"{os.cpu_count()} cores")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,514 @@
+"""Videos: every frame rectified with the pose of its moment, into a video or image sequence.
+
+The main process decodes (:class:`~gsrwt_cli.inputs.videos.VideoReader`), finds each frame's
+pose in the pose log (:class:`~gsrwt_cli.geometry.timeline.Timeline`) and encodes; the frames
+are warped by the workers (:class:`FrameWorker`, the same plan and warp as a still image:
+:func:`~gsrwt_cli.api.rectify.plan_image` and
+:func:`~gsrwt_cli.imaging.images.warp_image`), at most
+:data:`~gsrwt_cli.batch.executor.ITEMS_IN_FLIGHT` frames in flight per worker and a bounded
+number waiting to be put back in order (:meth:`~gsrwt_cli.batch.executor.ProcessExecutor.
+map_stream`). Every frame gets a row (:data:`~gsrwt_cli.tables.columns.VIDEO_COLUMNS`), in
+order; a file cut short adds an error row after its last frame.
+
+Outputs: ``h264`` and ``ffv1`` videos are encoded into a temporary file beside the output and
+renamed when the whole video is done (:func:`~gsrwt_cli.io.outputs.open_atomic`), so a run
+that is stopped or killed leaves no file under the output's name; ``png`` writes
+``NAME/000000.png`` (six digits or more), each frame whole as it is done.
+
+Reruns: a video output that exists and that the previous table records, frame by frame, as
+made with these options (the ``made_with`` cell, the pose file's digest included) is
+skipped whole; one that exists otherwise is an error (``--overwrite`` redoes it). An image
+sequence continues: a frame whose file exists and is recorded so is skipped (still decoded,
+not warped); one whose file exists without a record is made again in memory and compared.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+import multiprocessing
+import os
+import queue
+import threading
+import warnings
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..api.rectify import plan_image, view_for_image
+from ..geometry.framing import steady_box
+from ..geometry.rotations import PoseError, pose_from_rotation
+from ..geometry.timeline import PoseGapError, Timeline
+from ..imaging.images import encode_image, warp_image
+from ..inputs.pose_log import PoseLog
+from ..inputs.records import RecordError, merge_values, view_from_values
+from ..inputs.videos import FrameFailure, VideoError, VideoFrame, VideoReader
+from ..io.outputs import open_atomic, remove_stale_temporaries, write_atomic
+from ..tables.rows import params_row, plan_row
+from .executor import ProcessExecutor
+from .job_errors import JobError, error_text
+from .rectify_jobs import NOT_MADE_SO, Counts
+from .settings import Settings
+from .workers import ProcessWorker
+
+#: ``--codec``: the video codecs (:data:`~gsrwt_cli.imaging.videos.VIDEO_CODECS`) and ``png``,
+#: an image sequence.
+CODEC_CHOICES = ("h264", "ffv1", "png")
+#: ``--time``: the pose file's ``time`` counts from the first frame, or on the container's
+#: own clock (``pts * time_base``).
+TIME_MODES = ("relative", "absolute")
+#: ``--max-pose-gap``'s default, in seconds.
+DEFAULT_MAX_POSE_GAP = 0.5
+#: Digits of an image sequence's frame numbers (more when there are more frames).
+FRAME_DIGITS = 6
+
+Row = dict[str, Any]
+
+
+@dataclass(frozen=True)
+class VideoJob:
+    """One video to rectify: its file, the output (a video file, or the directory of an
+    image sequence), the codec, its poses and how their times are read, the view options
+    (``fallback``), and what makes its output (``made_with``)."""
+
+    source: Path
+    output: Path
+    codec: str
+    poses: PoseLog
+    time_mode: str = "relative"
+    max_gap: float = DEFAULT_MAX_POSE_GAP
+    fallback: Mapping[str, Any] = field(default_factory=dict)
+    made_with: str = ""
+    #: ``--steady``: every frame framed on the wall the first frame's default frame shows.
+    steady: bool = False
+
+
+@dataclass(frozen=True)
+class FrameJob:
+    """One frame for a worker: its ``index``, ``time``, pixels and view values (None with an
+    ``error`` known before the warp), where its values came from, its ``output`` (an image
+    sequence's file; None: the pixels come back for the encoder), whether that file existed
+    and the previous table's ``record`` of it."""
+
+    image: str
+    index: int
+    time: float | None
+    pixels: np.ndarray | None
+    values: Mapping[str, Any] | None
+    where: str
+    output: Path | None
+    shown_output: str
+    focal_source: str = "option"
+    error: str | None = None
+    existed: bool = False
+    record: Mapping[str, Any] | None = None
+    #: ``--steady``: the view values of the video's first frame, whose frame every frame keeps.
+    steady_from: Mapping[str, Any] | None = None
+
+
+def output_of(source: Path, outdir: Path, codec: str) -> Path:
+    """Where a video's output goes: ``OUTDIR/NAME.mp4`` (h264), ``OUTDIR/NAME.mkv`` (ffv1)
+    or the directory ``OUTDIR/NAME`` (png)."""
+    from ..imaging.videos import VIDEO_CODECS
+
+    stem = outdir / source.stem
+    return stem if codec == "png" else stem.with_suffix(VIDEO_CODECS[codec].extension)
+
+
+def frame_file(directory: Path, index: int) -> Path:
+    """An image sequence's file of frame ``index``: ``000042.png``."""
+    return directory / f"{index:0{FRAME_DIGITS}d}.png"
+
+
+def process_frame(job: FrameJob, settings: Settings, made_with: str) -> Row:
+    """Rectify one frame and return its row (with ``_pixels``, the warped frame, when it
+    goes to the encoder); never raises for a bad frame."""
+    row: Row = {"image": job.image, "frame": job.index, "time": job.time,
+                "output": job.shown_output}
+    try:
+        with np.errstate(all="ignore"), warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            if job.error is not None:
+                raise JobError(job.error)
+            if job.record is not None:
+                return {**job.record, "status": "skipped", "error": None}
+            assert job.values is not None and job.pixels is not None
+            try:
+                view = view_from_values(job.values, job.where)
+            except RecordError as error:
+                raise JobError(str(error)) from None
+            row.update(params_row(view, job.image), focal_source=job.focal_source,
+                       pose_source="poses")
+            height, width = job.pixels.shape[:2]
+            framing = settings.framing
+            if job.steady_from is not None:
+                first = view_for_image(view_from_values(job.steady_from, job.where), width,
+                                       height)
+                framing = replace(framing, bbox=steady_box(view_for_image(view, width, height),
+                                                           first))
+            plan = plan_image(view, width, height, framing)
+            warped = warp_image(job.pixels, plan.pixel_map, settings.interpolation,
+                                settings.fill, settings.alpha, settings.antialias)
+            status = "ok"
+            if job.output is not None:
+                encoded = encode_image(warped, ".png")
+                checking = job.existed and not settings.overwrite and os.path.lexists(
+                    job.output)
+                if checking:
+                    with open(job.output, "rb") as handle:
+                        if handle.read(len(encoded) + 1) != encoded:
+                            raise JobError(NOT_MADE_SO)
+                    status = "skipped"
+                else:
+                    write_atomic(job.output, encoded, root=settings.root)
+            else:
+                row["_pixels"] = warped
+        row.update(plan_row(plan), image=job.image, made_with=made_with, status=status)
+    except Exception as error:  # every failure of one frame is that frame's row
+        row.update(status="error", error=error_text(error, settings.describe))
+    return row
+
+
+class FrameWorker(ProcessWorker):
+    """One video worker: the settings and the ``made_with`` of the video's output."""
+
+    def __init__(self, settings: Settings, made_with: str, opencv_threads: int = 0) -> None:
+        super().__init__(opencv_threads)
+        self.settings = settings
+        self.made_with = made_with
+
+    def __call__(self, job: FrameJob) -> Row:
+        return process_frame(job, self.settings, self.made_with)
+
+
+class InProcess:
+    """``-j 1``: the frames warped in this process, one at a time (the executor's
+    :meth:`~gsrwt_cli.batch.executor.ProcessExecutor.map_stream` shape)."""
+
+    def __init__(self, worker: Callable[[FrameJob], Row]) -> None:
+        self.worker = worker
+
+    def map_stream(self, items: Iterator[FrameJob]) -> Iterator[tuple[int, Row]]:
+        for index, item in enumerate(items):
+            yield index, self.worker(item)
+
+
+def _dead_frame_row(job: FrameJob, reason: str) -> Row:
+    return {"image": job.image, "frame": job.index, "time": job.time,
+            "output": job.shown_output, "status": "error", "error": reason}
+
+
+def _remove_temporaries_of(job: FrameJob, pid: int) -> None:
+    if job.output is not None:
+        remove_stale_temporaries(job.output.parent, {pid})
+
+
+@dataclass
+class _Decoding:
+    """What the decoding loop learnt: the frame count, and why it stopped early."""
+
+    frames: int = 0
+    end_error: str | None = None
+    pts: dict[int, int | None] = field(default_factory=dict)
+    steady_from: Mapping[str, Any] | None = None  # --steady: the first frame's values
+
+
+def _frame_values(job: VideoJob, timeline: Timeline, moment: float, index: int
+                  ) -> tuple[dict[str, Any], str, str]:
+    """The view values of the frame at ``moment`` on the pose file's clock, where they came
+    from, and its focal length's source; :class:`JobError` for a frame without a pose."""
+    where = f"{job.poses.path.name} at frame {index} ({moment:.6g} s)"
+    try:
+        at = timeline.at(moment)
+        pose = pose_from_rotation(at.rotation)
+    except (PoseGapError, PoseError) as error:
+        raise JobError(f"{job.poses.path.name}: {error}") from None
+    own = {**at.numbers, "pan": pose.pan, "tilt": pose.tilt, "roll": pose.roll}
+    values = merge_values(own, job.poses.defaults, job.fallback)
+    if {"focal", "fx"} & (set(at.numbers) | set(job.poses.defaults)):
+        source = "poses"
+    elif job.fallback.get("focal") is not None or job.fallback.get("fx") is not None:
+        source = "option"
+    else:
+        source = "camera" if job.fallback.get("camera") else "option"
+    return values, where, source
+
+
+def run_video(job: VideoJob, settings: Settings, processes: int,
+              on_row: Callable[[Row], None], *,
+              on_progress: Callable[[], None] | None = None,
+              previous: Sequence[Mapping[str, Any]] = (),
+              context: multiprocessing.context.BaseContext | None = None,
+              max_input_pixels: float = math.inf) -> Counts:
+    """Rectify every frame of ``job``'s video and hand each row to ``on_row``, in frame
+    order; returns the counts. ``previous``: the last table's rows of this video.
+
+    A stop (``KeyboardInterrupt``, SIGTERM's exception) ends the workers and goes on after
+    the rows of the frames decoded so far: ``interrupted``, every one of them for a video
+    (whose file is then not written), those not done for an image sequence.
+    """
+    counts = Counts()
+
+    def deliver(row: Row) -> None:
+        row.pop("_pixels", None)
+        counts.add(row)
+        on_row(row)
+
+    image = str(job.source)
+    shown = str(job.output)
+    if job.codec != "png" and not settings.overwrite and os.path.lexists(job.output):
+        for row in _rows_of_finished_video(job, previous, shown):
+            deliver(row)
+        return counts
+    try:
+        reader = VideoReader(job.source, max_input_pixels)
+    except VideoError as error:
+        deliver({"image": image, "output": shown, "status": "error", "error": str(error)})
+        return counts
+    timeline = job.poses.timeline(job.max_gap)
+    with reader:
+        if job.codec == "png":
+            _run(job, settings, processes, reader, timeline, deliver, on_progress, previous,
+                 context, None)
+        else:
+            _run_encoded(job, settings, processes, reader, timeline, deliver, on_progress,
+                         context)
+    return counts
+
+
+def _rows_of_finished_video(job: VideoJob, previous: Sequence[Mapping[str, Any]],
+                            shown: str) -> list[Row]:
+    """The rows of a video output that exists: the previous table's, ``skipped``, when they
+    record it whole as made with these options; else one error row."""
+    rows = [dict(row) for row in previous if row.get("output") == shown]
+    complete = bool(rows) and all(
+        row.get("made_with") in (None, "", job.made_with) and row.get("status") in (
+            "ok", "skipped", "error") for row in rows) and any(
+        row.get("made_with") == job.made_with for row in rows)
+    if not complete:
+        error = (NOT_MADE_SO if not rows or all(row.get("made_with") in (None, "", job.made_with)
+                                                for row in rows) else
+                 "its output exists from a run with other options (the previous table's "
+                 "made_with differs); use --overwrite to redo it")
+        return [{"image": str(job.source), "output": shown, "status": "error", "error": error}]
+    for row in rows:
+        if row.get("status") == "ok":
+            row["status"] = "skipped"
+    return rows
+
+
+class _NothingWrittenError(Exception):
+    """No frame reached the encoder: no file is made."""
+
+
+def _run_encoded(job: VideoJob, settings: Settings, processes: int, reader: VideoReader,
+                 timeline: Timeline, deliver: Callable[[Row], None],
+                 on_progress: Callable[[], None] | None,
+                 context: multiprocessing.context.BaseContext | None) -> None:
+    """A video output: rows held until the file is whole (a stopped run's are
+    ``interrupted``: its file is not written)."""
+    from ..imaging.videos import VIDEO_CODECS, VideoEncodeError, VideoEncoder
+
+    held: list[Row] = []
+    try:
+        with open_atomic(job.output, "wb", root=settings.root) as handle:
+            encoder = VideoEncoder(handle, VIDEO_CODECS[job.codec], reader.info.time_base,
+                                   reader.info.rate)
+            decoding = _Decoding()
+            writer = _EncoderThread(encoder, (VideoEncodeError, ValueError))
+
+            def encode(row: Row) -> None:
+                pixels = row.pop("_pixels", None)
+                pts = decoding.pts.pop(row.get("frame"), None)
+                if pixels is not None and row["status"] == "ok":
+                    writer.put(row, pixels, pts if pts is not None else row["frame"])
+                held.append(row)
+
+            try:
+                _run(job, settings, processes, reader, timeline, encode, on_progress, (),
+                     context, decoding)
+                writer.finish()
+                if encoder.frames == 0:
+                    raise _NothingWrittenError
+                encoder.close()
+            except BaseException:
+                writer.finish(drop=True)
+                encoder.abandon()
+                raise
+    except _NothingWrittenError:  # every frame failed: their rows, and no file
+        pass
+    except BaseException as stop:
+        failed = isinstance(stop, Exception)
+        for row in held:
+            if row["status"] == "ok" and failed:
+                row.update(status="error",
+                           error=f"the video could not be written: {error_text(stop)}")
+            elif row["status"] == "ok":
+                row.update(status="interrupted", error="not done: the run was interrupted")
+            deliver(row)
+        if not failed:
+            raise
+        return
+    for row in held:
+        deliver(row)
+
+
+#: Frames waiting for the encoder's thread (each a warped frame in memory).
+ENCODE_AHEAD = 4
+
+
+class _EncoderThread:
+    """The encoder in a thread of its own (PyAV lets go of the GIL while FFmpeg encodes), so
+    that decoding and the workers' results go on while a frame is encoded; at most
+    :data:`ENCODE_AHEAD` frames wait. A frame the encoder refuses (one of ``refused``) makes
+    its row an ``error``."""
+
+    def __init__(self, encoder: Any, refused: tuple[type[BaseException], ...]) -> None:
+        self.encoder = encoder
+        self.refused = refused
+        self.frames: queue.Queue[tuple[Row, np.ndarray, int] | None] = queue.Queue(
+            ENCODE_AHEAD)
+        self.failure: BaseException | None = None
+        self.drop = False
+        self.thread = threading.Thread(target=self._run, daemon=True)
+        self.thread.start()
+
+    def _run(self) -> None:
+        while True:
+            item = self.frames.get()
+            if item is None:
+                return
+            row, pixels, pts = item
+            if self.drop or self.failure is not None:
+                continue
+            try:
+                self.encoder.write(pixels, pts)
+            except self.refused as error:
+                row.update(status="error", error=error_text(error))
+            except Exception as error:  # the file cannot be finished: reported by finish
+                self.failure = error
+
+    def put(self, row: Row, pixels: np.ndarray, pts: int) -> None:
+        if self.failure is not None:
+            raise self.failure
+        self.frames.put((row, pixels, pts))
+
+    def finish(self, drop: bool = False) -> None:
+        """Wait for the frames queued (``drop``: throw them away) and end the thread;
+        raises what stopped the encoder, if anything did."""
+        self.drop = self.drop or drop
+        self.frames.put(None)
+        self.thread.join()
+        if self.failure is not None and not drop:
+            raise self.failure
+
+
+def _run(job: VideoJob, settings: Settings, processes: int, reader: VideoReader,
+         timeline: Timeline, deliver: Callable[[Row], None],
+         on_progress: Callable[[], None] | None, previous: Sequence[Mapping[str, Any]],
+         context: multiprocessing.context.BaseContext | None,
+         decoding: _Decoding | None) -> None:
+    """Decode, warp on the executor, and hand the rows over in frame order."""
+    decoding = decoding or _Decoding()
+    image, png = str(job.source), job.codec == "png"
+    recorded = {str(row.get("output")): row for row in previous
+                if row.get("status") in ("ok", "skipped") and not row.get("error")}
+    jobs_out: dict[int, FrameJob] = {}
+
+    def frame_jobs() -> Iterator[FrameJob]:
+        frames = reader.frames()
+        while True:
+            try:
+                item = next(frames)
+            except StopIteration:
+                return
+            except VideoError as error:
+                decoding.end_error = str(error)
+                return
+            decoding.frames = item.index + 1
+            decoding.pts[item.index] = item.pts
+            made = _frame_job(job, item, timeline, png, recorded, settings, image)
+            if job.steady and made.error is None and made.values is not None:
+                if decoding.steady_from is None:
+                    decoding.steady_from = made.values
+                made = replace(made, steady_from=decoding.steady_from)
+            jobs_out[item.index] = replace(made, pixels=None)
+            yield made
+
+    if processes > 1:
+        executor: Any = ProcessExecutor(
+            FrameWorker.in_own_process, (settings, job.made_with, 1),
+            processes, on_death=_dead_frame_row, on_abandon=_remove_temporaries_of,
+            context=context or multiprocessing.get_context())
+    else:
+        executor = InProcess(FrameWorker(settings, job.made_with))
+    waiting: dict[int, Row] = {}
+    following = 0
+    results = executor.map_stream(frame_jobs())
+    try:
+        for index, row in results:
+            waiting[index] = row
+            while following in waiting:
+                jobs_out.pop(following, None)
+                if on_progress is not None:
+                    on_progress()
+                deliver(waiting.pop(following))
+                following += 1
+    except BaseException:
+        results.close()
+        for index in sorted(set(jobs_out) | set(waiting)):
+            if index < following:
+                continue
+            row = waiting.pop(index, None)
+            if row is None or (not png):
+                frame = jobs_out[index]
+                row = _dead_frame_row(frame, "not done: the run was interrupted")
+                row["status"] = "interrupted"
+            deliver(row)
+        raise
+    finally:
+        results.close()
+    if decoding.end_error is not None:
+        deliver({"image": image, "frame": decoding.frames, "output": str(job.output),
+                 "status": "error", "error": decoding.end_error})
+
+
+def _frame_job(job: VideoJob, item: VideoFrame | FrameFailure, timeline: Timeline, png: bool,
+               recorded: Mapping[str, Mapping[str, Any]], settings: Settings,
+               image: str) -> FrameJob:
+    """The frame's job: its view values from the pose log, or the error it already has."""
+    output = frame_file(job.output, item.index) if png else None
+    shown = str(output) if output is not None else str(job.output)
+    base = FrameJob(image, item.index, item.time, None, None, "", output, shown)
+    if isinstance(item, FrameFailure):
+        return replace(base, error=item.reason)
+    moment = item.absolute if job.time_mode == "absolute" else item.time
+    try:
+        values, where, source = _frame_values(job, timeline, moment, item.index)
+    except JobError as error:
+        return replace(base, error=str(error))
+    existed = output is not None and os.path.lexists(output)
+    record = None
+    if existed and not settings.overwrite:
+        previous = recorded.get(shown)
+        if previous is not None and previous.get("made_with") == job.made_with:
+            record = previous
+        elif previous is not None:
+            return replace(base, values=values, where=where,
+                           error="its output exists from a run with other options (the "
+                                 "previous table's made_with differs); use --overwrite to "
+                                 "redo it")
+    return FrameJob(image, item.index, item.time, None if record else item.pixels, values,
+                    where, output, shown, source, None, existed, record)
+
+
+def remove_video_temporaries(job: VideoJob) -> None:
+    """Remove what a killed run left half-written for this video (its temporary file, or
+    those of its image sequence's frames)."""
+    with contextlib.suppress(OSError):
+        remove_stale_temporaries(job.output.parent, names={job.output.name})
+        if job.codec == "png" and job.output.is_dir():
+            remove_stale_temporaries(job.output)

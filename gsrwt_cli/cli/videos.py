@@ -1,0 +1,201 @@
+"""``gsrwt rectify VIDEO --poses FILE``: a video rectified frame by frame, with a table row
+per frame.
+
+The options are :mod:`.rectify`'s; this module checks what a video run needs (one video,
+a pose file, a codec this FFmpeg encodes, options that make sense for a stream), and runs
+it with the same table, signals and last line as a directory batch.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import csv
+import math
+import os
+import sys
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+import click
+from tqdm import tqdm
+
+from ..base.messages import one_line, quote
+from ..batch.rectify_jobs import Counts, Settings, worker_context
+from ..batch.reruns import made_with
+from ..batch.video_jobs import VideoJob, output_of, remove_video_temporaries, run_video
+from ..inputs.pose_log import PoseLog, load_pose_log
+from ..inputs.sidecar import SidecarError
+from ..inputs.videos import VIDEO_EXTENSIONS, VideoError, import_av, is_video_name
+from ..io.outputs import remove_stale_temporaries
+from ..io.storage import Location
+from ..io.targets import file_identity
+from ..tables.columns import VIDEO_COLUMNS
+from ..tables.writer import TableWriter, read_table
+from .batch_run import TableWriteError, Terminated, end_batch, open_table, stop_on_signals
+from .options import InputError, prepare_directory, prepare_table
+
+
+def video_inputs(inputs: tuple[str, ...]) -> list[str]:
+    """The INPUTs named as videos (by their extension, :data:`VIDEO_EXTENSIONS`)."""
+    return [text for text in inputs if text != "-" and is_video_name(text)]
+
+
+def check_video_request(inputs: tuple[str, ...], poses: str | None, auto: str | None,
+                        refused: dict[str, bool]) -> None:
+    """A usage error, on one line, for a video run that cannot be: a video without
+    ``--poses`` (and ``--poses`` without one video), or options a video does not take
+    (``refused``: the option's name and whether it was given)."""
+    videos = video_inputs(inputs)
+    if poses is None:
+        if auto is not None:
+            raise click.UsageError(f"{videos[0]}: --auto does not estimate a video's poses yet; "
+                                   "give them with --poses FILE")
+        raise click.UsageError(f"{videos[0]}: a video needs --poses FILE (a pose per moment: "
+                               "time, pan, tilt, ...; see docs/COMMANDS.md#videos)")
+    if len(inputs) != 1 or len(videos) != 1:
+        raise click.UsageError(
+            "--poses takes one video as INPUT (a file ending in "
+            f"{', '.join(VIDEO_EXTENSIONS)}), got {' '.join(map(quote, inputs))}")
+    for name, given in refused.items():
+        if given:
+            raise click.UsageError(f"{name} does not apply to a video (INPUT {inputs[0]})")
+
+
+def _previous_rows(path: str, fmt: str, video: str) -> list[dict[str, Any]]:
+    """The rows of ``video`` in the last run's table at ``path`` (none if unreadable)."""
+    try:
+        with open(path, encoding="utf-8", errors="surrogateescape", newline="") as stream:
+            rows = read_table(stream, fmt)
+    except (OSError, ValueError, csv.Error):
+        return []
+    return [row for row in rows if row.get("image") == video]
+
+
+def _check_first_view(log: PoseLog, fallback: dict[str, Any], poses: str) -> None:
+    """A usage error when the pose file's first sample and the options make no view (no
+    focal length, say): every frame would fail alike."""
+    from ..geometry.rotations import pose_from_rotation
+    from ..inputs.records import RecordError, merge_values, view_from_values
+
+    first = min(log.samples, key=lambda sample: sample.time)
+    pose = pose_from_rotation(first.rotation)
+    values = merge_values({**first.numbers, "pan": pose.pan, "tilt": pose.tilt,
+                           "roll": pose.roll}, log.defaults, fallback)
+    try:
+        view_from_values(values, f"--poses {poses}")
+    except RecordError as error:
+        hint = (" (give --focal, or a focal column)" if error.field in ("focal", "fx")
+                or "focal" in error.reason else "")
+        raise InputError(f"{one_line(str(error), 300)}{hint}") from None
+
+
+def rectify_video(inputs: tuple[str, ...], outdir: Path | Location, poses: str,
+                  time_mode: str, max_gap: float, codec: str, settings: Settings,
+                  table: Any, table_given: bool, run: Any,
+                  view_kwargs: dict[str, Any], steady: bool = False) -> None:
+    """Check, run and end a video run (the command's exit status and last line)."""
+    if isinstance(outdir, Location):
+        raise InputError(f"-o {outdir}: videos are written to a local directory only")
+    if not (math.isfinite(max_gap) and max_gap >= 0):
+        raise click.BadParameter("must be a number of seconds >= 0", param_hint="'--max-pose-gap'")
+    source = Path(inputs[0])
+    if not source.is_file():
+        raise InputError(f"{inputs[0]}: no such file" if not source.exists()
+                         else f"{inputs[0]}: not a file")
+    try:
+        import_av()
+    except VideoError as error:
+        raise InputError(f"{inputs[0]}: {error}") from None
+    if codec != "png":
+        from ..imaging.videos import VIDEO_CODECS, codec_available
+
+        if not codec_available(VIDEO_CODECS[codec]):
+            raise click.BadParameter(f"this PyAV's FFmpeg has no {VIDEO_CODECS[codec].encoder} "
+                                     "encoder; use --codec ffv1 or png", param_hint="'--codec'")
+        if settings.alpha:
+            raise click.UsageError(f"--alpha needs --codec png ({codec} has no alpha channel)")
+    try:
+        log: PoseLog = load_pose_log(poses)
+        log.timeline(max_gap)  # two samples at the same time: refused before any work
+    except SidecarError as error:
+        raise InputError(f"--poses {one_line(str(error), 400)}") from None
+    fallback = {name: value for name, value in view_kwargs.items()
+                if value is not None and not isinstance(value, bool)}
+    _check_first_view(log, fallback, poses)
+    output = output_of(source, outdir, codec)
+    if not table_given:
+        default = str(outdir / f"{source.stem}.csv")
+        table = replace(table, path=default, format="csv", default=default)
+    given = {file_identity(source), file_identity(Path(poses))}
+    for target, what in ((output, f"-o {outdir}: output {output}"),
+                         (Path(table.path), f"--table {table.path}")):
+        if table.path != "-" and file_identity(target) in given:
+            raise InputError(f"{what} would overwrite an input; choose another")
+    prepare_directory(outdir, f"-o {outdir}")
+    prepare_table(table.path, "--table")
+    words = made_with(dict(fallback), None, settings, ".png" if codec == "png" else
+                      output.suffix) or ""
+    words += (f" poses=sha256:{log.digest} time={time_mode} max_pose_gap={max_gap:g} "
+              f"codec={codec}" + (" steady=on" if steady else ""))
+    job = VideoJob(source, output, codec, log, time_mode, max_gap, fallback, words.strip(),
+                   steady)
+    remove_video_temporaries(job)
+    if table.path != "-":  # the table of a killed run
+        remove_stale_temporaries(Path(table.path).parent, names={Path(table.path).name})
+    previous = _previous_rows(table.path if table.path != "-" else table.default,
+                              table.format if table.path != "-" else "csv", str(source))
+    if click.get_current_context().params.get("jobs") is None:
+        # The main process decodes and encodes (its own core); the workers take the rest.
+        # On two cores, warping in the main process beside the encoder's thread is fastest
+        # (benchmarks/bench_video.py: 1.32 against 1.46 times PyAV alone with two workers).
+        run = replace(run, jobs=max(1, (os.cpu_count() or 1) - 1))
+    counts, stopped = _run(job, settings, table, run, previous)
+    summary = f"{counts.ok} frames ok, {counts.skipped} skipped, {counts.failed} failed"
+    if stopped is not None:
+        summary += f", {counts.interrupted} not done"
+    where = "" if table.path == "-" else f"; table: {table.path}"
+    end_batch(f"{summary}; output: {output}", where, stopped, counts.failed, run.quiet)
+
+
+def _run(job: VideoJob, settings: Settings, table: Any, run: Any,
+         previous: list[dict[str, Any]]) -> tuple[Counts, BaseException | None]:
+    tqdm.monitor_interval = 0
+    progress = tqdm(unit="frame", file=sys.stderr, dynamic_ncols=True,
+                    disable=run.quiet or not sys.stderr.isatty())
+    counts = Counts()
+    stopped: BaseException | None = None
+    try:
+        with stop_on_signals(), contextlib.ExitStack() as stack:
+            stream = stack.enter_context(open_table(table.path))
+            writer = TableWriter(stream, VIDEO_COLUMNS, table.format)
+
+            def on_row(row: dict[str, Any]) -> None:
+                try:
+                    writer.write_row(row)
+                except OSError as error:
+                    if table.path == "-":
+                        raise
+                    raise TableWriteError(error.strerror or str(error)) from None
+                counts.add(row)
+                if row["status"] == "error":
+                    frame = row.get("frame")
+                    at = f" frame {frame}" if frame is not None else ""
+                    progress.write(f"Error: {one_line(row['image'])}{at}: {row['error']}",
+                                   file=sys.stderr)
+
+            try:
+                run_video(job, settings, run.jobs, on_row, on_progress=lambda: progress.update(1),
+                          previous=previous, context=worker_context(False),
+                          max_input_pixels=settings.max_input_pixels)
+            except (KeyboardInterrupt, Terminated) as stop:
+                stopped = stop
+            try:
+                writer.close()
+            except OSError as error:
+                raise TableWriteError(error.strerror or str(error)) from None
+    except TableWriteError as error:
+        raise InputError(f"--table {table.path}: cannot write the table ({error})") from None
+    finally:
+        progress.close()
+    return counts, stopped
