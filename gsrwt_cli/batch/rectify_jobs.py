@@ -34,8 +34,9 @@ from ..imaging.images import (
     image_file_size,
     measure_image_file,
 )
-from ..inputs.focal import with_focal
+from ..inputs.focal import exif_head, with_focal
 from ..inputs.guides import parse_corners
+from ..inputs.lensfun import lens_source_of, needs_exif, with_lens_profile
 from ..inputs.parameters import Found, NotFound, Problem, resolve_parameters
 from ..inputs.records import (
     RecordError,
@@ -178,8 +179,12 @@ def _view(job: Job, estimate: bool = True, orientation: int | None = None
                 view = view_from_values(values, job.where, orientation or 1)
             except RecordError as error:
                 raise JobError(str(error)) from None
-            return view, found, {"pose_source": "estimated", "confidence": confidence}, None
-    values, source = with_focal(job.source, values, job.where, orientation or 1)
+            return view, found, {"pose_source": "estimated", "confidence": confidence,
+                                 "lens_source": lens_source_of(values) or "none"}, None
+    head = exif_head(job.source) if needs_exif(values) else None  # one read: focal, lens
+    values, source = with_focal(job.source, values, job.where, orientation or 1, head)
+    values, lens_source, lens_profile = with_lens_profile(
+        head, image_file_size(job.source) if head is not None else None, values)
     guided = guides_give_pose(values)
     if source is None and not guided:
         raise JobError(
@@ -187,7 +192,8 @@ def _view(job: Job, estimate: bool = True, orientation: int | None = None
             "focal length in the image's EXIF"
         )
     corners = values.get("corners")
-    columns: dict[str, Any] = {"pose_source": job.pose_source}
+    columns: dict[str, Any] = {"pose_source": job.pose_source, "lens_source": lens_source,
+                               "lens_profile": lens_profile}
     try:
         if guided:  # the pose the guides show; the focal length too when nothing gives one
             if values.get("width") in (None, "") and values.get("cx") in (None, ""):
