@@ -8,7 +8,6 @@ model (poly3, poly5, ptlens). Skipped without lensfunpy (the extra ``gsrwt[lense
 from __future__ import annotations
 
 import io
-import math
 
 import numpy as np
 import pytest
