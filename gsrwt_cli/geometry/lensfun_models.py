@@ -129,7 +129,9 @@ def lens_from_lensfun(model: str, terms: tuple[float, ...], focal_px: float, uni
     return _fitted(r, ratio, focal_px)
 
 
-def _fitted(r: np.ndarray, ratio: np.ndarray, focal_px: float) -> LensfunConversion:
+def _fitted(r: np.ndarray, ratio: np.ndarray, focal_px: float,
+            models: tuple[str, ...] = ("plumb_bob", "rational_polynomial")
+            ) -> LensfunConversion:
     """The radial model closest in pixels to ``r_d / r = ratio`` at the ideal radii ``r``:
     plumb_bob ``k1, k2, k3`` by least squares of the pixel displacement, and the rational
     model (``k1, k2, k3`` over ``k4, k5, k6``, linearised least squares: ``num - ratio den =
@@ -137,13 +139,15 @@ def _fitted(r: np.ndarray, ratio: np.ndarray, focal_px: float) -> LensfunConvers
     profiles with odd terms on a 6000 x 4000 photo, the largest error's median is 2.1 px for
     plumb_bob, 0.17 px for the rational model). The rational model is taken when it is
     closer, its denominator stays positive and it is one-to-one over the radii
-    (:func:`~gsrwt_cli.geometry.lens.monotonic_radius`)."""
+    (:func:`~gsrwt_cli.geometry.lens.monotonic_radius`). ``models``: those tried."""
     s = r * r
     target = focal_px * r * (ratio - 1)  # pixels the lens moves each ray
     candidates = []
     for model, columns in (("plumb_bob", [s, s**2, s**3]),
                            ("rational_polynomial",
                             [s, s**2, s**3, -ratio * s, -ratio * s**2, -ratio * s**3])):
+        if model not in models:
+            continue
         design = focal_px * r[:, None] * np.column_stack(columns)
         norms = np.linalg.norm(design, axis=0)
         norms[norms == 0] = 1.0
