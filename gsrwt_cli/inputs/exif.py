@@ -22,6 +22,10 @@ Pillow, where 134 ``IndexError`` escaped exifread, which also logged 2400 lines 
 raises on a damaged file means "no EXIF focal length". The tags describe the stored pixels
 (``W, H`` are the stored image's); for a photo whose EXIF orientation turns it a quarter,
 :func:`~gsrwt_cli.inputs.focal.exif_focal` swaps ``fx`` and ``fy``.
+
+:func:`camera_from_exif` reads the camera and lens the EXIF names (``Make``, ``Model``,
+``LensMake``, ``LensModel``) and ``FocalLength``: what finds a lens profile
+(:mod:`~gsrwt_cli.inputs.lensfun`).
 """
 
 from __future__ import annotations
