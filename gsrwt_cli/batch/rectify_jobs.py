@@ -36,7 +36,7 @@ from ..imaging.images import (
 )
 from ..inputs.focal import exif_head, with_focal
 from ..inputs.guides import parse_corners
-from ..inputs.lensfun import lens_source_of, needs_exif, with_lens_profile
+from ..inputs.lensfun import needs_exif, with_lens_profile
 from ..inputs.parameters import Found, NotFound, Problem, resolve_parameters
 from ..inputs.records import (
     RecordError,
@@ -173,14 +173,14 @@ def _view(job: Job, estimate: bool = True, orientation: int | None = None
         if job.estimate.mode == "document":
             values = document_values(job.source, values, job.estimate)
         else:
-            values, found, confidence = estimated_view_values(job.source, values, job.where,
-                                                              job.estimate)
+            values, found, confidence, lens = estimated_view_values(
+                job.source, values, job.where, job.estimate)
             try:
                 view = view_from_values(values, job.where, orientation or 1)
             except RecordError as error:
                 raise JobError(str(error)) from None
             return view, found, {"pose_source": "estimated", "confidence": confidence,
-                                 "lens_source": lens_source_of(values) or "none"}, None
+                                 **lens}, None
     head = exif_head(job.source) if needs_exif(values) else None  # one read: focal, lens
     values, source = with_focal(job.source, values, job.where, orientation or 1, head)
     values, lens_source, lens_profile = with_lens_profile(

@@ -174,3 +174,40 @@ def test_a_camera_not_in_the_database_gets_no_profile_and_todays_output(rectifie
         assert (row["lens_source"], row["lens_profile"]) == ("none", ""), row
     assert (folder / "out" / f"{name}-unknown.png").read_bytes() == (
         folder / "out" / f"{name}-plain.png").read_bytes()
+
+
+def grid_texture() -> np.ndarray:
+    """The smooth texture with dark lines every 60 px: straight edges for ``--auto``."""
+    texture = smooth_texture(900, 1200, 7)
+    for x in range(0, 1200, 60):
+        cv2.line(texture, (x, 0), (x, 900), (30, 30, 30), 3)
+    for y in range(0, 900, 60):
+        cv2.line(texture, (0, y), (1200, y), (30, 30, 30), 3)
+    return texture
+
+
+@pytest.mark.slow
+def test_auto_estimates_the_pose_through_the_profile(tmp_path, monkeypatch):
+    """``rectify --auto``: the profile undoes the lens before the lines are read, so the
+    wall's straight edges are straight; without it (no EXIF) they bend and the estimate is
+    refused or worse."""
+    monkeypatch.setitem(globals(), "TEXTURE", grid_texture())
+    tags = PHOTOS["poly3"]
+    profile = profile_of(*tags)
+    focal = focal_px(profile[0], tags[3])
+    photo = render(focal, profile)
+    (tmp_path / "lens.jpg").write_bytes(jpeg(photo, tags))
+    (tmp_path / "plain.jpg").write_bytes(jpeg(photo, None))
+    result = run_gsrwt("rectify", str(tmp_path), "--auto", "--focal", repr(focal), "-o",
+                       str(tmp_path / "out"), "--table", str(tmp_path / "table.csv"), "-q")
+    assert result.returncode in (0, 1), result.stderr
+    rows = {row["image"].rsplit("/", 1)[-1]: row for row in read_table(tmp_path / "table.csv")}
+    lens = rows["lens.jpg"]
+    assert (lens["status"], lens["lens_source"]) == ("ok", "lensfun"), lens["error"]
+    assert lens["lens_profile"].endswith("poly3 exact")
+    miss = math.hypot(float(lens["pan_deg"]) - PAN, float(lens["tilt_deg"]) - TILT)
+    assert miss < 2.0, (lens["pan_deg"], lens["tilt_deg"])
+    plain = rows["plain.jpg"]
+    assert plain["lens_source"] in ("none", "")  # empty on a row whose view failed
+    assert plain["status"] == "error" or math.hypot(
+        float(plain["pan_deg"]) - PAN, float(plain["tilt_deg"]) - TILT) > miss
