@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 
 from ..api.rectify import plan_image
-from ..base.messages import one_line
+from ..base.messages import one_line, shorten
 from ..geometry.camera import View
 from ..geometry.framing import Plan
 from ..geometry.orientation import displayed_size
@@ -36,7 +36,7 @@ from ..imaging.images import (
 )
 from ..inputs.focal import exif_head, with_focal
 from ..inputs.guides import parse_corners
-from ..inputs.lensfun import needs_exif, with_lens_profile
+from ..inputs.lensfun import lens_source_of, needs_exif, with_lens_profile
 from ..inputs.parameters import Found, NotFound, Problem, resolve_parameters
 from ..inputs.records import (
     RecordError,
@@ -221,6 +221,31 @@ def _made_with(job: Job, settings: Settings) -> str | None:
         return made_with(job.values, None, settings, job.output.suffix, auto="document")
     return made_with(job.values, estimate.wall if estimate is not None else None, settings,
                      job.output.suffix)
+
+
+def _lens_change(job: Job) -> str | None:
+    """How the lens this run gives a recorded job differs from its record's (``lens_source
+    none -> lensfun``), or None: a lens profile is found in the image's EXIF, not in the
+    values ``made_with`` records, so a rerun looks it up again (the EXIF read only where
+    lensfun may be asked: no lens given, the extra installed)."""
+    assert job.record is not None
+    if job.values is None:
+        return None
+    recorded_source = job.record.get("lens_source") or None
+    recorded = (recorded_source or "none", job.record.get("lens_profile") or "")
+    if not needs_exif(job.values):
+        now = (lens_source_of(job.values) or "none", "")
+    else:
+        head = exif_head(job.source)
+        values, _ = with_focal(job.source, job.values, job.where, 1, head)
+        size = image_file_size(job.source) if head is not None else None
+        _, source, profile = with_lens_profile(head, size, values)
+        now = (source, profile or "")
+    if now == recorded or (recorded_source is None and now[0] != "lensfun"):
+        return None  # (a table from before lens_source: only a profile found since counts)
+    if now[0] != recorded[0]:
+        return f"lens_source {recorded[0]} -> {now[0]}"
+    return f"lens_profile {shorten(recorded[1] or 'none', 60)} -> {shorten(now[1], 60)}"
 
 
 #: The error of an existing output that no record vouches for and these options do not make.
@@ -506,7 +531,8 @@ def run_batch(
         job = jobs[index]
         if job.record is None:
             return process_job(job, settings)
-        change = differences(job.record["made_with"], _made_with(job, settings) or "")
+        change = (differences(job.record["made_with"], _made_with(job, settings) or "")
+                  or _lens_change(job))
         if change is None:
             return {**job.record, "status": "skipped", "error": None}
         error = f"its output exists from a run with other options ({change}); use " \

@@ -14,6 +14,7 @@ import importlib.util
 import io
 
 import numpy as np
+import pytest
 from PIL import Image
 
 from tests.helpers.cli import run_gsrwt
@@ -81,3 +82,37 @@ def test_without_the_extra_a_known_camera_is_rectified_as_before(tmp_path):
                                                "plain.jpg": ("none", "", "ok")}
     assert (photos / "out" / "known.jpg").read_bytes() == (
         photos / "out" / "plain.jpg").read_bytes()
+
+
+def test_a_rerun_notices_a_profile_found_since(tmp_path):
+    """A profile is found in the photo's EXIF, not in the values ``made_with`` records: a
+    rerun after installing the extra names the change instead of keeping the pinhole output
+    (and one without the extra keeps it)."""
+    pytest.importorskip("lensfunpy")
+    hide = tmp_path / "hide"
+    hide.mkdir()
+    (hide / "sitecustomize.py").write_text('import sys\nsys.modules["lensfunpy"] = None\n')
+    photos = tmp_path / "photos"
+    photos.mkdir()
+    write_photo(photos / "known.jpg")
+    write_photo(photos / "plain.jpg", tags=None)
+
+    def run(env=None):
+        result = run_gsrwt("rectify", str(photos), "--pan", "15", "--tilt", "5", "--focal",
+                           "450", "-o", str(photos / "out"), "-q", env=env)
+        rows = {row["image"].rsplit("/", 1)[-1]: row
+                for row in read_table(photos / "out" / "gsrwt.csv")}
+        return result.returncode, {name: (row["status"], row["error"])
+                                   for name, row in rows.items()}
+
+    hidden = {"PYTHONPATH": str(hide)}
+    assert run(hidden) == (0, {"known.jpg": ("ok", ""), "plain.jpg": ("ok", "")})
+    assert run(hidden) == (0, {"known.jpg": ("skipped", ""), "plain.jpg": ("skipped", "")})
+    code, rows = run()
+    assert code == 1 and rows["plain.jpg"] == ("skipped", "")
+    assert rows["known.jpg"][0] == "error"
+    assert "(lens_source none -> lensfun); use --overwrite" in rows["known.jpg"][1]
+    done = run_gsrwt("rectify", str(photos), "--pan", "15", "--tilt", "5", "--focal", "450",
+                     "-o", str(photos / "out"), "-q", "--overwrite")
+    assert done.returncode == 0, done.stderr
+    assert run() == (0, {"known.jpg": ("skipped", ""), "plain.jpg": ("skipped", "")})
