@@ -87,29 +87,42 @@ def _database() -> Any:
 
 
 @functools.lru_cache(maxsize=1)
-def _aspect_ratios() -> dict[tuple[str, str, float], float]:
-    """Every bundled lens's calibration aspect ratio (long side over short), by (maker,
-    model, crop factor as lensfun's float holds it) in lower case."""
-    import xml.etree.ElementTree as ElementTree
-
+def _database_files() -> tuple[tuple[Path, str], ...]:
+    """The bundled database's XML files and their text (about 5 MB, read once)."""
     import lensfunpy
+
+    return tuple((path, path.read_text(encoding="utf-8")) for path in sorted(
+        (Path(lensfunpy.__file__).parent / "db_files").glob("*.xml")))
+
+
+@functools.lru_cache(maxsize=256)
+def _aspect_ratio(maker: str, model: str, crop: float) -> float:
+    """The calibration aspect ratio (long side over short) of the bundled lens ``maker``
+    ``model`` calibrated at crop factor ``crop`` (as lensfun's float holds it), 3:2 when the
+    database names none: only the files that name the model are parsed."""
+    import xml.etree.ElementTree as ElementTree
+    from xml.sax.saxutils import escape
+
     import numpy as np
 
-    ratios = {}
-    for path in sorted((Path(lensfunpy.__file__).parent / "db_files").glob("*.xml")):
-        for lens in ElementTree.parse(path).getroot().iter("lens"):
-            maker = next((e.text for e in lens.findall("maker") if "lang" not in e.attrib), "")
-            model = next((e.text for e in lens.findall("model") if "lang" not in e.attrib), "")
-            crop = float(np.float32(lens.findtext("cropfactor", "nan")))
-            text = (lens.findtext("aspect-ratio") or "").strip()
-            width, _, height = text.partition(":")
+    named = f">{escape(model)}</model>"
+    for _, text in _database_files():
+        if named not in text:
+            continue
+        for lens in ElementTree.fromstring(text).iter("lens"):
+            if (maker not in [e.text for e in lens.findall("maker")]
+                    or model not in [e.text for e in lens.findall("model")]
+                    or float(np.float32(lens.findtext("cropfactor", "nan"))) != crop):
+                continue  # (a name in any language: lensfun gives the locale's)
+            ratio_text = (lens.findtext("aspect-ratio") or "").strip()
+            width, _, height = ratio_text.partition(":")
             try:
-                ratio = float(width) / float(height) if height else float(text)
+                ratio = float(width) / float(height) if height else float(ratio_text)
             except (ValueError, ZeroDivisionError):
-                ratio = DEFAULT_ASPECT
-            ratios[((maker or "").lower(), (model or "").lower(), crop)] = max(
-                ratio, 1 / ratio) if ratio > 0 else DEFAULT_ASPECT
-    return ratios
+                return DEFAULT_ASPECT
+            return max(ratio, 1 / ratio) if ratio > 0 and math.isfinite(ratio) else (
+                DEFAULT_ASPECT)
+    return DEFAULT_ASPECT
 
 
 def _named(maker: str, model: str) -> str:
@@ -156,8 +169,7 @@ def _find_profile(exif: ExifCamera) -> LensProfile | None:
     if model not in LENSFUN_MODELS:
         return None
     count = {"poly3": 1, "poly5": 2, "ptlens": 3}[model]
-    aspect = _aspect_ratios().get(
-        (lens.maker.lower(), lens.model.lower(), float(lens.crop_factor)), DEFAULT_ASPECT)
+    aspect = _aspect_ratio(lens.maker, lens.model, float(lens.crop_factor))
     return LensProfile(_named(camera.maker, camera.model), _named(lens.maker, lens.model),
                        model, tuple(float(t) for t in calibration.terms[:count]),
                        float(camera.crop_factor), float(lens.crop_factor), aspect, float(focal))
