@@ -72,6 +72,8 @@ class EstimateOptions:
     #: ``lines``: the pose from the image's lines; ``document``: from the corners of the
     #: largest clear quadrilateral of strong edges (:mod:`~gsrwt_cli.vision.document`).
     mode: str = "lines"
+    #: ``--lens-profile``: ``auto``, ``lensfun`` or ``off`` (:mod:`~gsrwt_cli.inputs.lensfun`).
+    lens_profile: str = "auto"
 
     def __post_init__(self) -> None:
         if self.wall not in WALL_CHOICES:
@@ -80,17 +82,19 @@ class EstimateOptions:
             raise ValueError(f"mode must be one of {', '.join(AUTO_MODES)}")
 
 
-def camera_for(path: Path, values: Mapping[str, Any], where: str, orientation: int = 1
+def camera_for(path: Path, values: Mapping[str, Any], where: str, orientation: int = 1,
+               lens_profile: str = "auto"
                ) -> tuple[Intrinsics | None, str, tuple[float, float] | None, dict[str, Any]]:
     """The intrinsics an image's values give (their pose left out), where its focal length
     comes from (``option``, ``sidecar``, ``camera``, ``exif``, or ``estimated`` when nothing
     gives one: then the intrinsics are None), the principal point given without a focal
     length, and the lens's ``lens_source`` and ``lens_profile`` (a lensfun profile when the
     values give no lens and the focal length is known: :mod:`~gsrwt_cli.inputs.lensfun`); all
-    of the photo as its EXIF ``orientation`` displays it (1: as stored). Raises
+    of the photo as its EXIF ``orientation`` displays it (1: as stored); ``lens_profile``:
+    ``--lens-profile``'s mode. Raises
     :class:`~gsrwt_cli.inputs.records.RecordError` for a bad value."""
     own = {name: value for name, value in values.items() if name not in _POSE_VALUES}
-    head = exif_head(path) if needs_exif(own) else None  # one read: focal, lens
+    head = exif_head(path) if needs_exif(own, lens_profile) else None  # one read: focal, lens
     own, source = with_focal(path, own, where, orientation, head)
     if source is None:
         view = view_from_values({**own, "pan": 0, "tilt": 0, "focal": 1.0}, where, orientation)
@@ -98,7 +102,7 @@ def camera_for(path: Path, values: Mapping[str, Any], where: str, orientation: i
         lens = {"lens_source": lens_source_of(own) or "none", "lens_profile": None}
         return None, "estimated", (view.cx, view.cy) if given else None, lens
     own, lens_source, lens_profile = with_lens_profile(
-        head, image_file_size(path) if head is not None else None, own)
+        head, image_file_size(path) if head is not None else None, own, lens_profile)
     return (view_from_values({**own, "pan": 0, "tilt": 0}, where, orientation).intrinsics,
             source, None, {"lens_source": lens_source, "lens_profile": lens_profile})
 
@@ -114,7 +118,8 @@ def estimate_file(path: Path, values: Mapping[str, Any], where: str, options: Es
     the focal length was estimated), the focal length's source, the decoded image and the
     lens's columns (:func:`camera_for`)."""
     orientation = orientation_of(path, options)
-    camera, source, principal_point, lens = camera_for(path, values, where, orientation)
+    camera, source, principal_point, lens = camera_for(path, values, where, orientation,
+                                                       options.lens_profile)
     image = read_image(path, options.max_input_pixels, orientation)
     height, width = image.shape[:2]
     if camera is not None and camera.width is not None and (
@@ -238,7 +243,8 @@ def estimated_view_values(path: Path, values: Mapping[str, Any], where: str,
     height, width = image.shape[:2]
     del image
     checked(estimate, options)
-    principal_point = (camera_for(path, values, where, orientation_of(path, options))[2]
+    principal_point = (camera_for(path, values, where, orientation_of(path, options),
+                                  options.lens_profile)[2]
                        if camera is None else None)
     merged = {name: value for name, value in values.items()
               if name not in (*_POSE_VALUES, *SENSOR_FIELDS, "focal", "fx", "fy")}
@@ -296,7 +302,8 @@ def process_estimate(job: EstimateJob, options: EstimateOptions,
             principal_point = None
             if camera is None:
                 principal_point = camera_for(job.source, job.values, job.where,
-                                             orientation_of(job.source, options))[2]
+                                             orientation_of(job.source, options),
+                                             options.lens_profile)[2]
             if job.picture is not None:
                 from ..api.estimate_drawing import draw_estimate  # only when pictures are asked for
 

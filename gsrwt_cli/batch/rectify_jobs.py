@@ -149,15 +149,15 @@ def _orientation_cell(orientation: int | None) -> str:
     return "ignored" if orientation is None else str(orientation)
 
 
-def _view(job: Job, estimate: bool = True, orientation: int | None = None
-          ) -> tuple[View, str, dict[str, Any], str | None]:
+def _view(job: Job, estimate: bool = True, orientation: int | None = None,
+          lens_profile: str = "auto") -> tuple[View, str, dict[str, Any], str | None]:
     """The job's view, where its focal length came from (EXIF read here if needed), its
     ``pose_source``, ``confidence``, ``aspect`` and ``aspect_source`` columns, and the
     corners of a rectangle its pose was found from (``--corners``, or those of a document
     found by ``--auto document``; None without). An estimated pose is estimated here
     (unless not ``estimate``: then it is an error). ``orientation``: the image's EXIF
     orientation, applied (the view of the displayed photo; None or 1: of the stored
-    pixels)."""
+    pixels). ``lens_profile``: ``--lens-profile``'s mode (:mod:`~gsrwt_cli.inputs.lensfun`)."""
     if job.error is not None:
         raise JobError(job.error)
     assert job.values is not None
@@ -181,10 +181,10 @@ def _view(job: Job, estimate: bool = True, orientation: int | None = None
                 raise JobError(str(error)) from None
             return view, found, {"pose_source": "estimated", "confidence": confidence,
                                  **lens}, None
-    head = exif_head(job.source) if needs_exif(values) else None  # one read: focal, lens
+    head = exif_head(job.source) if needs_exif(values, lens_profile) else None  # one read
     values, source = with_focal(job.source, values, job.where, orientation or 1, head)
-    values, lens_source, lens_profile = with_lens_profile(
-        head, image_file_size(job.source) if head is not None else None, values)
+    values, lens_source, profile = with_lens_profile(
+        head, image_file_size(job.source) if head is not None else None, values, lens_profile)
     guided = guides_give_pose(values)
     if source is None and not guided:
         raise JobError(
@@ -193,7 +193,7 @@ def _view(job: Job, estimate: bool = True, orientation: int | None = None
         )
     corners = values.get("corners")
     columns: dict[str, Any] = {"pose_source": job.pose_source, "lens_source": lens_source,
-                               "lens_profile": lens_profile}
+                               "lens_profile": profile}
     try:
         if guided:  # the pose the guides show; the focal length too when nothing gives one
             if values.get("width") in (None, "") and values.get("cx") in (None, ""):
@@ -223,23 +223,23 @@ def _made_with(job: Job, settings: Settings) -> str | None:
                      job.output.suffix)
 
 
-def _lens_change(job: Job) -> str | None:
+def _lens_change(job: Job, mode: str) -> str | None:
     """How the lens this run gives a recorded job differs from its record's (``lens_source
     none -> lensfun``), or None: a lens profile is found in the image's EXIF, not in the
     values ``made_with`` records, so a rerun looks it up again (the EXIF read only where
-    lensfun may be asked: no lens given, the extra installed)."""
+    lensfun may be asked: no lens given, the extra installed). ``mode``: ``--lens-profile``'s."""
     assert job.record is not None
     if job.values is None:
         return None
     recorded_source = job.record.get("lens_source") or None
     recorded = (recorded_source or "none", job.record.get("lens_profile") or "")
-    if not needs_exif(job.values):
+    if not needs_exif(job.values, mode):
         now = (lens_source_of(job.values) or "none", "")
     else:
         head = exif_head(job.source)
         values, _ = with_focal(job.source, job.values, job.where, 1, head)
         size = image_file_size(job.source) if head is not None else None
-        _, source, profile = with_lens_profile(head, size, values)
+        _, source, profile = with_lens_profile(head, size, values, mode)
         now = (source, profile or "")
     if now == recorded or (recorded_source is None and now[0] != "lensfun"):
         return None  # (a table from before lens_source: only a profile found since counts)
@@ -290,7 +290,8 @@ def process_job(job: Job, settings: Settings, scratch: Scratch | None = None) ->
         with np.errstate(all="ignore"), warnings.catch_warnings(), fetched(job.source):
             warnings.simplefilter("ignore")
             orientation = _orientation(job, settings)
-            view, source, pose, corners = _view(job, orientation=orientation)
+            view, source, pose, corners = _view(job, orientation=orientation,
+                                                lens_profile=settings.lens_profile)
             row.update(params_row(view, str(job.source)), focal_source=source, **pose,
                        orientation=_orientation_cell(orientation))
             if checking and not is_regular_file(job.output):
@@ -342,7 +343,8 @@ def record_row(job: Job, settings: Settings, status: str = "ok") -> dict[str, An
     try:
         with np.errstate(all="ignore"):
             orientation = _orientation(job, settings)
-            view, source, pose, corners = _view(job, orientation=orientation)
+            view, source, pose, corners = _view(job, orientation=orientation,
+                                                lens_profile=settings.lens_profile)
             row.update(params_row(view, str(job.source)), focal_source=source, **pose,
                        orientation=_orientation_cell(orientation))
             size = displayed_size(orientation or 1,
@@ -367,7 +369,8 @@ def died_row(job: Job, reason: str, settings: Settings) -> dict[str, Any]:
     row: dict[str, Any] = {"image": str(job.source), "output": str(job.output)}
     with contextlib.suppress(Exception), np.errstate(all="ignore"):
         orientation = _orientation(job, settings)
-        view, source, pose, _ = _view(job, estimate=False, orientation=orientation)
+        view, source, pose, _ = _view(job, estimate=False, orientation=orientation,
+                                      lens_profile=settings.lens_profile)
         row.update(params_row(view, str(job.source)), focal_source=source, **pose,
                    orientation=_orientation_cell(orientation))
     row.update(status="error", error=reason)
@@ -532,7 +535,7 @@ def run_batch(
         if job.record is None:
             return process_job(job, settings)
         change = (differences(job.record["made_with"], _made_with(job, settings) or "")
-                  or _lens_change(job))
+                  or _lens_change(job, settings.lens_profile))
         if change is None:
             return {**job.record, "status": "skipped", "error": None}
         error = f"its output exists from a run with other options ({change}); use " \

@@ -140,6 +140,8 @@ def made_with(values: Mapping[str, Any] | None, wall: str | None, settings: Sett
               ("fill", _number(settings.fill)), ("alpha", "on" if settings.alpha else "off")]
     if settings.orientation != "exif":  # the default left out: tables made before it hold
         words.append(("orientation", settings.orientation))
+    if settings.lens_profile == "off":  # auto and lensfun make the same files
+        words.append(("lens_profile", "off"))
     if suffix.lower() in LOSSY:
         words.append(("quality", str(settings.quality)))
     return " ".join(f"{name}={value}" for name, value in words)

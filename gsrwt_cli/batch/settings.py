@@ -29,6 +29,8 @@ class Settings:
     antialias: bool = True
     #: ``exif``: the photo as its EXIF orientation displays it; ``ignore``: the stored pixels.
     orientation: str = "exif"
+    #: ``--lens-profile``: ``auto``, ``lensfun`` or ``off`` (:mod:`~gsrwt_cli.inputs.lensfun`).
+    lens_profile: str = "auto"
     root: Path | Location | None = None  # the output directory: nothing is written outside it
     #: Words an error in the caller's terms (a picklable callable: it goes to workers).
     describe: Describe | None = None

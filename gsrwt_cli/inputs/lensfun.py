@@ -39,6 +39,9 @@ from ..geometry.lensfun_models import (
 )
 from .exif import ExifCamera, camera_from_exif
 
+#: ``--lens-profile``: ``auto`` (lensfun's database when the extra is installed), ``lensfun``
+#: (the same, asked for: the command refuses to run without the extra), ``off`` (never).
+LENS_PROFILE_MODES = ("auto", "lensfun", "off")
 #: The fields whose presence in an image's values means its lens is given (``sidecar``).
 LENS_GIVERS = (*LENS_FIELDS, "distortion_model")
 
@@ -191,7 +194,8 @@ def _focal_px(values: Mapping[str, Any]) -> float | None:
 
 
 def with_lens_profile(head: bytes | None, size: tuple[int, int] | None,
-                      values: Mapping[str, Any]) -> tuple[dict[str, Any], str, str | None]:
+                      values: Mapping[str, Any], mode: str = "auto"
+                      ) -> tuple[dict[str, Any], str, str | None]:
     """An image's values with its lens resolved, its ``lens_source`` and the profile's
     ``lens_profile`` cell (module docstring).
 
@@ -200,12 +204,14 @@ def with_lens_profile(head: bytes | None, size: tuple[int, int] | None,
     (lensfun's normalisation; the same for the photo turned a quarter). A profile becomes
     the values' ``distortion_model`` and coefficients for the focal length in pixels the
     values give, centred on the principal point (lensfun's is the image's centre, the
-    default principal point).
+    default principal point). ``mode``: :data:`LENS_PROFILE_MODES` (``off``: no profile).
     """
     values = dict(values)
     given = lens_source_of(values)
     if given is not None:
         return values, given, None
+    if mode == "off":
+        return values, "none", None
     focal = _focal_px(values)
     if head is None or size is None or focal is None or not lensfun_installed():
         return values, "none", None
@@ -229,6 +235,7 @@ def with_lens_profile(head: bytes | None, size: tuple[int, int] | None,
     return values, "lensfun", f"{profile.name()}: {how}"
 
 
-def needs_exif(values: Mapping[str, Any]) -> bool:
-    """Whether finding the image's lens reads its EXIF: no lens given, lensfun installed."""
-    return lens_source_of(values) is None and lensfun_installed()
+def needs_exif(values: Mapping[str, Any], mode: str = "auto") -> bool:
+    """Whether finding the image's lens reads its EXIF: no lens given, profiles not ``off``,
+    lensfun installed."""
+    return mode != "off" and lens_source_of(values) is None and lensfun_installed()

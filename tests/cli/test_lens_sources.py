@@ -116,3 +116,38 @@ def test_a_rerun_notices_a_profile_found_since(tmp_path):
                      "-o", str(photos / "out"), "-q", "--overwrite")
     assert done.returncode == 0, done.stderr
     assert run() == (0, {"known.jpg": ("skipped", ""), "plain.jpg": ("skipped", "")})
+
+
+def test_lens_profile_off_and_lensfun_asked_for(tmp_path):
+    """``--lens-profile off``: a pinhole for every photo whose lens is given nowhere (and
+    ``made_with`` says so); ``--lens-profile lensfun`` without the extra: a usage error."""
+    hide = tmp_path / "hide"
+    hide.mkdir()
+    (hide / "sitecustomize.py").write_text('import sys\nsys.modules["lensfunpy"] = None\n')
+    photos = tmp_path / "photos"
+    photos.mkdir()
+    write_photo(photos / "known.jpg")
+    write_photo(photos / "plain.jpg", tags=None)
+    rows = rectify(photos, "--pan", "15", "--tilt", "5", "--focal", "450", "--lens-profile",
+                   "off")
+    assert {name: row["lens_source"] for name, row in rows.items()} == {"known.jpg": "none",
+                                                                         "plain.jpg": "none"}
+    assert all(" lens_profile=off " in row["made_with"] for row in rows.values())
+    assert (photos / "out" / "known.jpg").read_bytes() == (
+        photos / "out" / "plain.jpg").read_bytes()
+    for command in (("rectify", str(photos), "-o", str(tmp_path / "out2"), "--pan", "15",
+                     "--tilt", "5"), ("estimate", str(photos))):
+        refused = run_gsrwt(*command, "--focal", "450", "--lens-profile", "lensfun",
+                            env={"PYTHONPATH": str(hide)})
+        assert refused.returncode == 2, refused.stderr
+        assert refused.stderr.strip().splitlines()[-1] == (
+            "Error: Invalid value for '--lens-profile': lensfun needs the extra: pip install "
+            "'gsrwt[lenses]'"), refused.stderr
+        assert "Traceback" not in refused.stderr
+
+
+def test_the_options_choices_are_the_modes():
+    from gsrwt_cli.cli.options import LENS_PROFILE_CHOICES
+    from gsrwt_cli.inputs.lensfun import LENS_PROFILE_MODES
+
+    assert LENS_PROFILE_CHOICES == LENS_PROFILE_MODES
