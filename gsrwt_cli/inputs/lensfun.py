@@ -42,6 +42,9 @@ from .exif import ExifCamera, camera_from_exif
 #: ``--lens-profile``: ``auto`` (lensfun's database when the extra is installed), ``lensfun``
 #: (the same, asked for: the command refuses to run without the extra), ``off`` (never).
 LENS_PROFILE_MODES = ("auto", "lensfun", "off")
+#: A focal length this far outside the lens's range (below its shortest, above its longest)
+#: means EXIF names another lens: no profile.
+FOCAL_SLACK = (0.95, 1.05)
 #: The fields whose presence in an image's values means its lens is given (``sidecar``).
 LENS_GIVERS = (*LENS_FIELDS, "distortion_model")
 
@@ -137,7 +140,8 @@ def find_profile(exif: ExifCamera) -> LensProfile | None:
     lens at its focal length, or None. The camera is lensfun's best match of make and model;
     the lens its best match of lens make and model among the camera's mounts, or, when EXIF
     names no lens, the camera's only lens (a compact's fixed lens); the focal length EXIF's
-    ``FocalLength`` (a prime's own when absent). Never raises."""
+    ``FocalLength`` (a prime's own when absent), within the lens's range
+    (:data:`FOCAL_SLACK`). Never raises."""
     try:
         return _find_profile(exif)
     except Exception:  # noqa: BLE001 - a third-party library's lookup: no profile
@@ -163,8 +167,9 @@ def _find_profile(exif: ExifCamera) -> LensProfile | None:
     focal = exif.focal_mm
     if focal is None and lens.min_focal and lens.min_focal == lens.max_focal:
         focal = lens.min_focal
-    if focal is None:
-        return None
+    if focal is None or (lens.min_focal and lens.max_focal and not (
+            FOCAL_SLACK[0] * lens.min_focal <= focal <= FOCAL_SLACK[1] * lens.max_focal)):
+        return None  # (lensfun would take its nearest calibration: another lens, most likely)
     calibration = lens.interpolate_distortion(focal)
     if calibration is None:
         return None

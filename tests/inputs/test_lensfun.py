@@ -69,7 +69,9 @@ def test_a_camera_or_lens_not_in_the_database_has_no_profile():
     for tags in [("Panasonic", "DMC-LC80", "", 5.8),  # York Urban's camera: not there
                  ("OLYMPUS IMAGING CORP.", "E-M10", "", 14.0),  # an interchangeable lens, unnamed
                  ("OLYMPUS IMAGING CORP.", "E-M10", "M.Zuiko Digital ED 14-42mm f/3.5-5.6",
-                  None)]:  # a zoom without a focal length
+                  None),  # a zoom without a focal length
+                 ("OLYMPUS IMAGING CORP.", "E-M10", "M.Zuiko Digital ED 14-42mm f/3.5-5.6",
+                  100.0)]:  # a focal length the lens does not have: another lens
         exif = camera_from_exif(exif_jpeg(*tags))
         assert exif is not None and find_profile(exif) is None, tags
     assert camera_from_exif(exif_jpeg("", "", "", None)) is None
