@@ -35,8 +35,9 @@ from ..imaging.images import (
     image_file_size,
     read_image,
 )
-from ..inputs.focal import with_focal
+from ..inputs.focal import exif_head, with_focal
 from ..inputs.guides import fit_pose, guided_pose, has_guides
+from ..inputs.lensfun import lens_source_of, needs_exif, with_lens_profile
 from ..inputs.records import (
     GSRWT_FIELDS,
     POSE_FIELDS,
@@ -78,6 +79,8 @@ class EstimateOptions:
     #: ``lines``: the pose from the image's lines; ``document``: from the corners of the
     #: largest clear quadrilateral of strong edges (:mod:`~gsrwt_cli.vision.document`).
     mode: str = "lines"
+    #: ``--lens-profile``: ``auto``, ``lensfun`` or ``off`` (:mod:`~gsrwt_cli.inputs.lensfun`).
+    lens_profile: str = "auto"
 
     def __post_init__(self) -> None:
         if self.wall not in WALL_CHOICES:
@@ -86,22 +89,29 @@ class EstimateOptions:
             raise ValueError(f"mode must be one of {', '.join(AUTO_MODES)}")
 
 
-def camera_for(path: Path, values: Mapping[str, Any], where: str, orientation: int = 1
-               ) -> tuple[Intrinsics | None, str, tuple[float, float] | None]:
+def camera_for(path: Path, values: Mapping[str, Any], where: str, orientation: int = 1,
+               lens_profile: str = "auto"
+               ) -> tuple[Intrinsics | None, str, tuple[float, float] | None, dict[str, Any]]:
     """The intrinsics an image's values give (their pose left out), where its focal length
     comes from (``option``, ``sidecar``, ``camera``, ``exif``, or ``estimated`` when nothing
-    gives one: then the intrinsics are None), and the principal point given without a focal
-    length; all of the photo as its EXIF ``orientation`` displays it (1: as stored). Raises
+    gives one: then the intrinsics are None), the principal point given without a focal
+    length, and the lens's ``lens_source`` and ``lens_profile`` (a lensfun profile when the
+    values give no lens and the focal length is known: :mod:`~gsrwt_cli.inputs.lensfun`); all
+    of the photo as its EXIF ``orientation`` displays it (1: as stored); ``lens_profile``:
+    ``--lens-profile``'s mode. Raises
     :class:`~gsrwt_cli.inputs.records.RecordError` for a bad value."""
-    own, source = with_focal(
-        path, {name: value for name, value in values.items() if name not in _POSE_VALUES},
-        where, orientation)
+    own = {name: value for name, value in values.items() if name not in _POSE_VALUES}
+    head = exif_head(path) if needs_exif(own, lens_profile) else None  # one read: focal, lens
+    own, source = with_focal(path, own, where, orientation, head)
     if source is None:
         view = view_from_values({**own, "pan": 0, "tilt": 0, "focal": 1.0}, where, orientation)
         given = own.get("cx") not in (None, "")
-        return None, "estimated", (view.cx, view.cy) if given else None
+        lens = {"lens_source": lens_source_of(own) or "none", "lens_profile": None}
+        return None, "estimated", (view.cx, view.cy) if given else None, lens
+    own, lens_source, lens_profile = with_lens_profile(
+        head, image_file_size(path) if head is not None else None, own, lens_profile)
     return (view_from_values({**own, "pan": 0, "tilt": 0}, where, orientation).intrinsics,
-            source, None)
+            source, None, {"lens_source": lens_source, "lens_profile": lens_profile})
 
 
 def orientation_of(path: Path, options: EstimateOptions) -> int:
@@ -110,11 +120,13 @@ def orientation_of(path: Path, options: EstimateOptions) -> int:
 
 
 def estimate_file(path: Path, values: Mapping[str, Any], where: str, options: EstimateOptions
-                  ) -> tuple[PoseEstimate, Intrinsics | None, str, np.ndarray]:
+                  ) -> tuple[PoseEstimate, Intrinsics | None, str, np.ndarray, dict[str, Any]]:
     """Read ``path`` and estimate its pose: the estimate, the camera it was given (None when
-    the focal length was estimated), the focal length's source and the decoded image."""
+    the focal length was estimated), the focal length's source, the decoded image and the
+    lens's columns (:func:`camera_for`)."""
     orientation = orientation_of(path, options)
-    camera, source, principal_point = camera_for(path, values, where, orientation)
+    camera, source, principal_point, lens = camera_for(path, values, where, orientation,
+                                                       options.lens_profile)
     image = read_image(path, options.max_input_pixels, orientation)
     height, width = image.shape[:2]
     if camera is not None and camera.width is not None and (
@@ -122,7 +134,7 @@ def estimate_file(path: Path, values: Mapping[str, Any], where: str, options: Es
         raise ValueError(f"the parameters say {camera.width}x{camera.height} pixels but the "
                          f"image is {width}x{height}")
     estimate = estimate_pose(image, camera, principal_point=principal_point, wall=options.wall)
-    return estimate, camera, source, image
+    return estimate, camera, source, image, lens
 
 
 def checked(estimate: PoseEstimate, options: EstimateOptions) -> None:
@@ -231,7 +243,7 @@ def document_values(path: Path, values: Mapping[str, Any], where: str,
     sized = dict(own)
     if sized.get("width") in (None, "") and sized.get("cx") in (None, ""):
         sized["height"], sized["width"] = image.shape[:2]
-    camera = camera_for(path, sized, where, orientation)[0]
+    camera = camera_for(path, sized, where, orientation, options.lens_profile)[0]
     if camera is not None:
         try:
             fit = guided_pose({"corners": own["corners"], "aspect": own.get("aspect")},
@@ -247,16 +259,20 @@ def document_values(path: Path, values: Mapping[str, Any], where: str,
 
 
 def estimated_view_values(path: Path, values: Mapping[str, Any], where: str,
-                          options: EstimateOptions) -> tuple[dict[str, Any], str, float]:
+                          options: EstimateOptions
+                          ) -> tuple[dict[str, Any], str, float, dict[str, Any]]:
     """An image's values with its pose estimated (``rectify --auto``): the values (lens and
-    calibration file kept, the estimate's pose and intrinsics over them), where the focal
-    length came from, and the confidence. Raises :class:`~gsrwt_cli.api.estimate.EstimateError`
-    when the image cannot tell (or tells too little)."""
-    estimate, camera, source, image = estimate_file(path, values, where, options)
+    calibration file kept, the estimate's pose and intrinsics over them, the lensfun profile
+    the estimate used added), where the focal length came from, the confidence, and the
+    lens's ``lens_source`` and ``lens_profile``. Raises
+    :class:`~gsrwt_cli.api.estimate.EstimateError` when the image cannot tell (or tells too
+    little)."""
+    estimate, camera, source, image, lens = estimate_file(path, values, where, options)
     height, width = image.shape[:2]
     del image
     checked(estimate, options)
-    principal_point = (camera_for(path, values, where, orientation_of(path, options))[2]
+    principal_point = (camera_for(path, values, where, orientation_of(path, options),
+                                  options.lens_profile)[2]
                        if camera is None else None)
     merged = {name: value for name, value in values.items()
               if name not in (*_POSE_VALUES, *SENSOR_FIELDS, "focal", "fx", "fy")}
@@ -264,7 +280,10 @@ def estimated_view_values(path: Path, values: Mapping[str, Any], where: str,
     if values.get("fit") not in (None, "", "both"):  # --fit vertical or horizontal
         merged["pan"], merged["tilt"], merged["roll"] = fit_pose(
             merged["pan"], merged["tilt"], merged["roll"], values["fit"])
-    return merged, source, round(estimate.confidence, 4)
+    if lens["lens_source"] == "lensfun" and camera is not None:  # the profile estimated with
+        merged["distortion_model"] = camera.lens.model
+        merged.update(camera.lens.coefficients)
+    return merged, source, round(estimate.confidence, 4), lens
 
 
 # --------------------------------------------------------------------------------------------
@@ -304,14 +323,15 @@ def process_estimate(job: EstimateJob, options: EstimateOptions,
                 row.update(guided_row(job.source, values, job.where,
                                       orientation_of(job.source, options)), status="ok")
                 return row
-            estimate, camera, source, image = estimate_file(job.source, job.values, job.where,
-                                                            options)
+            estimate, camera, source, image, _ = estimate_file(job.source, job.values,
+                                                               job.where, options)
             row.update(estimate_row(estimate, source))
             height, width = image.shape[:2]
             principal_point = None
             if camera is None:
                 principal_point = camera_for(job.source, job.values, job.where,
-                                             orientation_of(job.source, options))[2]
+                                             orientation_of(job.source, options),
+                                             options.lens_profile)[2]
             if job.picture is not None:
                 from ..api.estimate_drawing import draw_estimate  # only when pictures are asked for
 

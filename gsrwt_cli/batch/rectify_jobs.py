@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 
 from ..api.rectify import plan_image
-from ..base.messages import one_line
+from ..base.messages import one_line, shorten
 from ..geometry.camera import View
 from ..geometry.framing import Plan
 from ..geometry.orientation import displayed_size
@@ -36,8 +36,9 @@ from ..imaging.images import (
     image_file_size,
     measure_image_file,
 )
-from ..inputs.focal import with_focal
+from ..inputs.focal import exif_head, with_focal
 from ..inputs.guides import parse_corners
+from ..inputs.lensfun import lens_source_of, needs_exif, with_lens_profile
 from ..inputs.parameters import Found, NotFound, Problem, resolve_parameters
 from ..inputs.records import (
     RecordError,
@@ -150,15 +151,15 @@ def _orientation_cell(orientation: int | None) -> str:
     return "ignored" if orientation is None else str(orientation)
 
 
-def _view(job: Job, estimate: bool = True, orientation: int | None = None
-          ) -> tuple[View, str, dict[str, Any], str | None]:
+def _view(job: Job, estimate: bool = True, orientation: int | None = None,
+          lens_profile: str = "auto") -> tuple[View, str, dict[str, Any], str | None]:
     """The job's view, where its focal length came from (EXIF read here if needed), its
     ``pose_source``, ``confidence``, ``aspect`` and ``aspect_source`` columns, and the
     corners of a rectangle its pose was found from (``--corners``, or those of a document
     found by ``--auto document``; None without). An estimated pose is estimated here
     (unless not ``estimate``: then it is an error). ``orientation``: the image's EXIF
     orientation, applied (the view of the displayed photo; None or 1: of the stored
-    pixels)."""
+    pixels). ``lens_profile``: ``--lens-profile``'s mode (:mod:`~gsrwt_cli.inputs.lensfun`)."""
     if job.error is not None:
         raise JobError(job.error)
     assert job.values is not None
@@ -174,14 +175,18 @@ def _view(job: Job, estimate: bool = True, orientation: int | None = None
         if job.estimate.mode == "document":
             values = document_values(job.source, values, job.where, job.estimate)
         else:
-            values, found, confidence = estimated_view_values(job.source, values, job.where,
-                                                              job.estimate)
+            values, found, confidence, lens = estimated_view_values(
+                job.source, values, job.where, job.estimate)
             try:
                 view = view_from_values(values, job.where, orientation or 1)
             except RecordError as error:
                 raise JobError(str(error)) from None
-            return view, found, {"pose_source": "estimated", "confidence": confidence}, None
-    values, source = with_focal(job.source, values, job.where, orientation or 1)
+            return view, found, {"pose_source": "estimated", "confidence": confidence,
+                                 **lens}, None
+    head = exif_head(job.source) if needs_exif(values, lens_profile) else None  # one read
+    values, source = with_focal(job.source, values, job.where, orientation or 1, head)
+    values, lens_source, profile = with_lens_profile(
+        head, image_file_size(job.source) if head is not None else None, values, lens_profile)
     guided = guides_give_pose(values)
     if source is None and not guided:
         raise JobError(
@@ -189,7 +194,8 @@ def _view(job: Job, estimate: bool = True, orientation: int | None = None
             "focal length in the image's EXIF"
         )
     corners = values.get("corners")
-    columns: dict[str, Any] = {"pose_source": job.pose_source}
+    columns: dict[str, Any] = {"pose_source": job.pose_source, "lens_source": lens_source,
+                               "lens_profile": profile}
     try:
         if guided:  # the pose the guides show; the focal length too when nothing gives one
             if values.get("width") in (None, "") and values.get("cx") in (None, ""):
@@ -217,6 +223,31 @@ def _made_with(job: Job, settings: Settings) -> str | None:
         return made_with(job.values, None, settings, job.output.suffix, auto="document")
     return made_with(job.values, estimate.wall if estimate is not None else None, settings,
                      job.output.suffix)
+
+
+def _lens_change(job: Job, mode: str) -> str | None:
+    """How the lens this run gives a recorded job differs from its record's (``lens_source
+    none -> lensfun``), or None: a lens profile is found in the image's EXIF, not in the
+    values ``made_with`` records, so a rerun looks it up again (the EXIF read only where
+    lensfun may be asked: no lens given, the extra installed). ``mode``: ``--lens-profile``'s."""
+    assert job.record is not None
+    if job.values is None:
+        return None
+    recorded_source = job.record.get("lens_source") or None
+    recorded = (recorded_source or "none", job.record.get("lens_profile") or "")
+    if not needs_exif(job.values, mode):
+        now = (lens_source_of(job.values) or "none", "")
+    else:
+        head = exif_head(job.source)
+        values, _ = with_focal(job.source, job.values, job.where, 1, head)
+        size = image_file_size(job.source) if head is not None else None
+        _, source, profile = with_lens_profile(head, size, values, mode)
+        now = (source, profile or "")
+    if now == recorded or (recorded_source is None and now[0] != "lensfun"):
+        return None  # (a table from before lens_source: only a profile found since counts)
+    if now[0] != recorded[0]:
+        return f"lens_source {recorded[0]} -> {now[0]}"
+    return f"lens_profile {shorten(recorded[1] or 'none', 60)} -> {shorten(now[1], 60)}"
 
 
 #: The error of an existing output that no record vouches for and these options do not make.
@@ -328,7 +359,8 @@ def process_job(job: Job, settings: Settings, scratch: Scratch | None = None) ->
         with np.errstate(all="ignore"), warnings.catch_warnings(), fetched(job.source):
             warnings.simplefilter("ignore")
             orientation = _orientation(job, settings)
-            view, source, pose, corners = _view(job, orientation=orientation)
+            view, source, pose, corners = _view(job, orientation=orientation,
+                                                lens_profile=settings.lens_profile)
             row.update(params_row(view, str(job.source)), focal_source=source, **pose,
                        orientation=_orientation_cell(orientation))
             if checking and not is_regular_file(job.output):
@@ -385,7 +417,8 @@ def record_row(job: Job, settings: Settings, status: str = "ok") -> dict[str, An
     try:
         with np.errstate(all="ignore"):
             orientation = _orientation(job, settings)
-            view, source, pose, corners = _view(job, orientation=orientation)
+            view, source, pose, corners = _view(job, orientation=orientation,
+                                                lens_profile=settings.lens_profile)
             row.update(params_row(view, str(job.source)), focal_source=source, **pose,
                        orientation=_orientation_cell(orientation))
             size = displayed_size(orientation or 1,
@@ -410,7 +443,8 @@ def died_row(job: Job, reason: str, settings: Settings) -> dict[str, Any]:
     row: dict[str, Any] = {"image": str(job.source), "output": str(job.output)}
     with contextlib.suppress(Exception), np.errstate(all="ignore"):
         orientation = _orientation(job, settings)
-        view, source, pose, _ = _view(job, estimate=False, orientation=orientation)
+        view, source, pose, _ = _view(job, estimate=False, orientation=orientation,
+                                      lens_profile=settings.lens_profile)
         row.update(params_row(view, str(job.source)), focal_source=source, **pose,
                    orientation=_orientation_cell(orientation))
     row.update(status="error", error=reason)
@@ -574,7 +608,8 @@ def run_batch(
         job = jobs[index]
         if job.record is None:
             return process_job(job, settings)
-        change = differences(job.record["made_with"], _made_with(job, settings) or "")
+        change = (differences(job.record["made_with"], _made_with(job, settings) or "")
+                  or _lens_change(job, settings.lens_profile))
         if change is None:
             return {**job.record, "status": "skipped", "error": None}
         error = f"its output exists from a run with other options ({change}); use " \

@@ -32,6 +32,8 @@ class Settings:
     #: Carry the input's EXIF to the output, with gsrwt's record in XMP (``--strip-metadata``:
     #: False, nothing but the pixels, and a JPEG's colour profile).
     metadata: bool = True
+    #: ``--lens-profile``: ``auto``, ``lensfun`` or ``off`` (:mod:`~gsrwt_cli.inputs.lensfun`).
+    lens_profile: str = "auto"
     root: Path | Location | None = None  # the output directory: nothing is written outside it
     #: Words an error in the caller's terms (a picklable callable: it goes to workers).
     describe: Describe | None = None

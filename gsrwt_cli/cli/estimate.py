@@ -28,9 +28,11 @@ from .options import (
     Number,
     PathOrUrl,
     auto_mode_command,
+    check_lens_profile,
     field_options,
     guide_options,
     jobs_option,
+    lens_profile_option,
     load_sidecar_option,
     make_output_directory,
     max_input_pixels_option,
@@ -98,12 +100,14 @@ camera_options = field_options(
                    "horizon, the frontal view's outline.")
 @max_input_pixels_option
 @orientation_option
+@lens_profile_option
 @jobs_option
 @quiet_option("No summary on stderr.")
 def estimate(inputs: tuple[str, ...], output: str | None, fmt: str | None, recursive: bool,
              sidecar: Path | None, auto: str, min_confidence: float, wall: str,
              draw: Path | None,
-             max_input_pixels: str, exif_orientation: str, jobs: int | None, quiet: bool,
+             max_input_pixels: str, exif_orientation: str, lens_profile: str,
+             jobs: int | None, quiet: bool,
              **camera: Any) -> None:
     """Estimate pan, tilt and roll of each image from its straight lines (thesis future work 1).
 
@@ -169,7 +173,9 @@ def estimate(inputs: tuple[str, ...], output: str | None, fmt: str | None, recur
                 error = f"--draw: {problem}"
         job_list.append(EstimateJob(source.path, PurePosixPath(source.relative).as_posix(),
                                     values, where, picture, error))
-    options = EstimateOptions(min_confidence, wall, input_pixel_limit, exif_orientation, auto)
+    check_lens_profile(lens_profile)
+    options = EstimateOptions(min_confidence, wall, input_pixel_limit, exif_orientation, auto,
+                              lens_profile)
     for problem in unreadable:
         report_error(problem)
     counts = {"ok": 0, "failed": len(unreadable), "interrupted": 0}

@@ -380,6 +380,32 @@ def orientation_option(func: F, names: tuple[str, ...] = ("--orientation",
                              "ignore: the pixels as stored.")(func)
 
 
+#: ``--lens-profile``'s choices (:data:`~gsrwt_cli.inputs.lensfun.LENS_PROFILE_MODES`, named
+#: here too: the options load without numpy).
+LENS_PROFILE_CHOICES = ("auto", "lensfun", "off")
+
+
+def lens_profile_option(func: F) -> F:
+    """``--lens-profile auto|lensfun|off``: lensfun's profile for photos whose lens is given
+    nowhere (:mod:`~gsrwt_cli.inputs.lensfun`)."""
+    return click.option("--lens-profile", type=click.Choice(LENS_PROFILE_CHOICES),
+                        default="auto", show_default=True,
+                        help="For photos whose lens no calibration file or lens column "
+                             "gives: auto: the profile lensfun's database has for their EXIF "
+                             "camera and lens, when the extra gsrwt[lenses] is installed; "
+                             "lensfun: the same, and an error without the extra; off: a "
+                             "pinhole.")(func)
+
+
+def check_lens_profile(mode: str) -> None:
+    """Refuse ``--lens-profile lensfun`` without the extra, as a usage error."""
+    from ..inputs.lensfun import lensfun_installed
+
+    if mode == "lensfun" and not lensfun_installed():
+        raise click.BadParameter("lensfun needs the extra: pip install 'gsrwt[lenses]'",
+                                 param_hint="'--lens-profile'")
+
+
 def quiet_option(what: str) -> Callable[[F], F]:
     """``-q/--quiet``: ``what`` the command leaves out (its summary, its progress bar)."""
     return click.option("-q", "--quiet", is_flag=True, help=what)

@@ -89,9 +89,11 @@ from .options import (
     Number,
     PathOrUrl,
     auto_mode_command,
+    check_lens_profile,
     guide_options,
     interpolation_option,
     jobs_option,
+    lens_profile_option,
     load_sidecar_option,
     max_input_pixels_option,
     orientation_option,
@@ -423,6 +425,7 @@ def dask_executor(address: str, processes: int, retries: int,
                    "'scale' says what was used), instead of a larger output.")
 @max_input_pixels_option
 @orientation_option
+@lens_profile_option
 @interpolation_option
 @click.option("--fill", type=Number(), default=0.0, show_default=True,
               help="Value of pixels with no source, in the image's units (0-255, 0-65535).")
@@ -544,7 +547,8 @@ def rectify(inputs: tuple[str, ...], outdir: Path | Location, recursive: bool,
     table = table_from_options(outdir, options.pop("table_path"), options.pop("shard"))
     auto = options.pop("auto")
     estimating = (EstimateOptions(options.pop("min_confidence"), options.pop("wall"),
-                                  settings.max_input_pixels, settings.orientation, auto)
+                                  settings.max_input_pixels, settings.orientation, auto,
+                                  settings.lens_profile)
                   if auto is not None else None)
     batch = plan_batch(inputs, outdir, recursive, sidecar, table, settings, extension,
                        estimating, view_kwargs=options)
@@ -620,7 +624,9 @@ def settings_from_options(outdir: Path | Location, options: dict[str, Any]
         antialias=options.pop("antialias"),
         orientation=options.pop("exif_orientation"),
         metadata=not options.pop("strip_metadata"),
+        lens_profile=options.pop("lens_profile"),
     )
+    check_lens_profile(settings.lens_profile)
     return settings, extension
 
 

@@ -22,6 +22,10 @@ Pillow, where 134 ``IndexError`` escaped exifread, which also logged 2400 lines 
 raises on a damaged file means "no EXIF focal length". The tags describe the stored pixels
 (``W, H`` are the stored image's); for a photo whose EXIF orientation turns it a quarter,
 :func:`~gsrwt_cli.inputs.focal.exif_focal` swaps ``fx`` and ``fy``.
+
+:func:`camera_from_exif` reads the camera and lens the EXIF names (``Make``, ``Model``,
+``LensMake``, ``LensModel``) and ``FocalLength``: what finds a lens profile
+(:mod:`~gsrwt_cli.inputs.lensfun`).
 """
 
 from __future__ import annotations
@@ -173,3 +177,52 @@ def _from_35mm(tags: dict[int, object], width: int, height: int) -> ExifFocal | 
         (focal, focal),
         f"exif FocalLengthIn35mmFilm {focal_35:g} mm over the {width}x{height} diagonal",
     )
+
+
+# IFD0's camera and the Exif IFD's lens (EXIF 2.3), for lens profiles (inputs/lensfun.py).
+_MAKE, _MODEL = 0x010F, 0x0110
+_LENS_MAKE, _LENS_MODEL = 0xA433, 0xA434
+#: Longest EXIF text kept (a make or model longer than this is garbage, not a name).
+NAME_LIMIT = 200
+
+
+class ExifCamera(NamedTuple):
+    """The camera and lens a photo's EXIF names (``""`` when it names none) and its
+    ``FocalLength`` in mm (None when absent or unusable): what finds a lens profile."""
+
+    make: str
+    model: str
+    lens_make: str
+    lens_model: str
+    focal_mm: float | None
+
+
+def camera_from_exif(data: bytes) -> ExifCamera | None:
+    """The camera, lens and focal length in mm of the image file ``data`` (its head is
+    enough), by Pillow as :func:`read_exif_tags`; None when it names no camera model. Never
+    raises for what a file holds."""
+    from PIL import Image
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        try:
+            with Image.open(io.BytesIO(data)) as image:
+                exif = image.getexif()
+                top = {tag: exif.get(tag) for tag in (_MAKE, _MODEL)}
+                tags = dict(exif.get_ifd(_EXIF_IFD))
+        except Exception:  # noqa: BLE001 - a damaged file of a third-party parser: no EXIF
+            return None
+    found = ExifCamera(_text(top[_MAKE]), _text(top[_MODEL]), _text(tags.get(_LENS_MAKE)),
+                       _text(tags.get(_LENS_MODEL)), _positive(tags.get(_FOCAL_LENGTH)))
+    return found if found.model else None
+
+
+def _text(value: object) -> str:
+    """An EXIF ASCII tag as one line of printable text (NULs and padding stripped), ``""``
+    when it is not text or too long to be a name."""
+    if isinstance(value, bytes):
+        value = value.decode("latin-1")
+    if not isinstance(value, str):
+        return ""
+    text = " ".join("".join(c for c in value.split("\0")[0] if c.isprintable()).split())
+    return text if len(text) <= NAME_LIMIT else ""

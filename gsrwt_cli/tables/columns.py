@@ -17,7 +17,7 @@ PARAMS_COLUMNS = (
 #: geometry, what made it, and how it went.
 RECTIFY_COLUMNS = (
     *PARAMS_COLUMNS, "focal_source", "pose_source", "confidence", "aspect", "aspect_source",
-    "orientation", "metadata", "output",
+    "orientation", "metadata", "lens_source", "lens_profile", "output",
     "out_width", "out_height", "scale", "homography", "made_with", "status", "error",
 )
 
@@ -31,6 +31,10 @@ VIDEO_COLUMNS = (RECTIFY_COLUMNS[0], "frame", "time", *RECTIFY_COLUMNS[1:])
 FOCAL_SOURCES = ("option", "sidecar", "camera", "exif", "estimated")
 POSE_SOURCES = ("sidecar", "yaml", "options", "estimated")
 RECTIFY_STATUSES = ("ok", "skipped", "error", "interrupted", "planned")
+#: Where a rectify row's lens came from (``lens_source``): lens columns of a sidecar row, the
+#: YAML beside the image or the options, a calibration file, lensfun's database (its profile
+#: named in ``lens_profile``), the image's lines (``--lens-from-lines``, to come), or nowhere.
+LENS_SOURCES = ("camera", "sidecar", "lensfun", "lines", "none")
 #: A rectify row's ``orientation``: the EXIF orientation applied (1-8, 1 also for a photo
 #: without one), or ``ignored`` (``--orientation ignore``: the stored pixels).
 ORIENTATION_VALUES = ("1", "2", "3", "4", "5", "6", "7", "8", "ignored")

@@ -19,6 +19,7 @@ from ..base.numerals import parse_decimal, parse_whole
 from ..inputs.guides import ASPECT_SOURCES
 from .columns import (
     FOCAL_SOURCES,
+    LENS_SOURCES,
     METADATA_VALUES,
     ORIENTATION_VALUES,
     PARAMS_COLUMNS,
@@ -242,6 +243,7 @@ RECTIFY_TABLE = TableSchema(
      "aspect_source": choice(*ASPECT_SOURCES, optional=True),
      "orientation": choice(*ORIENTATION_VALUES, optional=True),
      "metadata": choice(*METADATA_VALUES, optional=True),
+     "lens_source": choice(*LENS_SOURCES, optional=True),
      "status": choice(*RECTIFY_STATUSES)},
 )
 

@@ -12,7 +12,13 @@ import numpy as np
 import pytest
 from PIL import Image, TiffImagePlugin
 
-from gsrwt_cli.inputs.exif import ExifFocal, focal_from_exif, read_exif_tags
+from gsrwt_cli.inputs.exif import (
+    ExifCamera,
+    ExifFocal,
+    camera_from_exif,
+    focal_from_exif,
+    read_exif_tags,
+)
 from tests.helpers.images import smooth_texture
 
 RATIONAL, SRATIONAL, SHORT, LONG, ASCII, UNDEFINED = 5, 10, 3, 4, 2, 7
@@ -261,3 +267,36 @@ def test_a_photo_turned_a_quarter_swaps_fx_and_fy(tmp_path, orientation):
     exif.get_ifd(0x8769).update({PLANE_X: 0})  # no focal plane: the 35 mm tag, unturned
     Image.new("RGB", (400, 300)).save(path, "JPEG", exif=exif)
     assert exif_focal(path, orientation).fx == pytest.approx(26 * 500 / 43.2666, rel=1e-4)
+
+
+# --------------------------------------------------------------------------------------------
+# The camera and lens EXIF names (lens profiles, gsrwt_cli/inputs/lensfun.py)
+
+
+def test_the_camera_and_lens_as_exif_names_them():
+    found = camera_from_exif(pillow_jpeg({0xA433: "Lens maker", 0xA434: "Zoom 4-12mm\x00\x00",
+                                          FOCAL_LENGTH: TiffImagePlugin.IFDRational(473, 100)}))
+    assert found == ExifCamera("Phone maker", "Phone 12", "Lens maker", "Zoom 4-12mm", 4.73)
+    assert camera_from_exif(pillow_jpeg({})) == ExifCamera("Phone maker", "Phone 12", "", "",
+                                                           None)
+    # No model (the built EXIF has a Make only), no EXIF: nothing to look a profile up by.
+    assert camera_from_exif(jpeg_with_app1(tiff_exif([(FOCAL_LENGTH, RATIONAL,
+                                                       [(473, 100)])]))) is None
+    assert camera_from_exif(cv2.imencode(".jpg", smooth_texture(8, 8))[1].tobytes()) is None
+
+
+def test_damaged_camera_names_never_raise():
+    good = pillow_jpeg({0xA434: "Zoom 4-12mm", FOCAL_LENGTH: TiffImagePlugin.IFDRational(5, 1)})
+    start = good.index(b"Exif\x00\x00") + 6
+    end = start + struct.unpack(">H", good[start - 8:start - 6])[0] - 8
+    rng = np.random.default_rng(11)
+    named = 0
+    for trial in range(300):
+        payload = bytearray(good)
+        for _ in range(int(rng.integers(1, 9))):
+            payload[int(rng.integers(start, end))] = int(rng.integers(0, 256))
+        found = camera_from_exif(bytes(payload))
+        assert found is None or all(isinstance(text, str) and text.isprintable()
+                                    for text in found[:4]), (trial, found)
+        named += found is not None
+    assert 0 < named < 300  # some damage leaves the names readable, some does not
