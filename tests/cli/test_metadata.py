@@ -31,7 +31,9 @@ from tests.helpers.exif_photos import (
 from tests.helpers.images import smooth_texture
 from tests.helpers.tables import by_image_name, read_table
 
-POSE = ["--pan", "15", "--tilt", "8", "--roll", "2", "--focal", "400"]
+#: The photos name a camera and lens lensfun knows: no lens profile here, so that the outputs
+#: differ by their metadata alone (tests/cli/test_lens_profiles.py tests the profiles).
+POSE = ["--pan", "15", "--tilt", "8", "--roll", "2", "--focal", "400", "--lens-profile", "off"]
 FORMATS = ("jpg", "png", "webp", "tif")
 UPRIGHT = smooth_texture(240, 320, seed=4)
 
