@@ -8,9 +8,9 @@ import contextlib
 import signal
 import sys
 import threading
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator, Sequence
 from types import FrameType
-from typing import IO
+from typing import IO, Any
 
 import click
 
@@ -102,3 +102,40 @@ def open_table(path: str) -> Iterator[IO[str]]:
         if not finished:
             raise
         raise TableWriteError(error.strerror or str(error)) from None  # flushing at the end
+
+
+@contextlib.contextmanager
+def recorded_rows(path: str, columns: Sequence[str], fmt: str, counts: Any,
+                  report: Callable[[str], None], place: Callable[[dict[str, Any]], str]
+                  ) -> Iterator[Callable[[dict[str, Any]], None]]:
+    """A batch's table at ``path`` (``-``: stdout), yielding its ``on_row``: each row is
+    written as it comes (:func:`open_table`), counted in ``counts`` (``add``), and an error
+    row is reported in one line through ``report``, naming ``place(row)``. The table is closed
+    when the block ends (a run stopped by a signal has caught it inside, so every row is in);
+    a table that cannot be written (a full disk) is a one-line error naming ``--table``."""
+    from ..base.messages import one_line
+    from ..tables.writer import TableWriter
+    from .options import InputError
+
+    try:
+        with open_table(path) as stream:
+            writer = TableWriter(stream, columns, fmt)
+
+            def on_row(row: dict[str, Any]) -> None:
+                try:
+                    writer.write_row(row)
+                except OSError as error:
+                    if path == "-":
+                        raise
+                    raise TableWriteError(error.strerror or str(error)) from None
+                counts.add(row)
+                if row["status"] == "error":
+                    report(f"Error: {one_line(place(row))}: {row['error']}")
+
+            yield on_row
+            try:
+                writer.close()
+            except OSError as error:
+                raise TableWriteError(error.strerror or str(error)) from None
+    except TableWriteError as error:
+        raise InputError(f"--table {path}: cannot write the table ({error})") from None

@@ -75,12 +75,13 @@ from ..io.outputs import remove_stale_temporaries
 from ..io.storage import Location, location
 from ..io.targets import file_identity, protected_files
 from ..tables.shards import parse_shard, shard_slice, shard_table_name
-from ..tables.writer import TableWriter, format_from_extension, read_table
+from ..tables.writer import format_from_extension, read_table
 from .batch_run import (  # noqa: F401  (named here too: estimate and the tests take them)
     TableWriteError,
     Terminated,
     end_batch,
     open_table,
+    recorded_rows,
     stop_on_signals,
 )
 from .options import (
@@ -747,33 +748,15 @@ def run_planned(batch: PlannedBatch, settings: Settings, table: TableTarget, run
             if run.scheduler:
                 executor = cluster.enter_context(
                     dask_executor(run.scheduler, run.jobs, run.retries, settings))
-            stream = cluster.enter_context(open_table(table.path))
-            writer = TableWriter(stream, RECTIFY_COLUMNS, table.format)
-
-            def on_row(row: dict[str, Any]) -> None:
-                try:
-                    writer.write_row(row)
-                except OSError as error:
-                    if table.path == "-":
-                        raise
-                    raise TableWriteError(error.strerror or str(error)) from None
-                counts.add(row)
-                if row["status"] == "error":
-                    progress.write(f"Error: {one_line(row['image'])}: {row['error']}",
-                                   file=sys.stderr)
-
+            on_row = cluster.enter_context(recorded_rows(
+                table.path, RECTIFY_COLUMNS, table.format, counts,
+                lambda line: progress.write(line, file=sys.stderr), lambda row: row["image"]))
             try:
                 run_batch(batch.jobs, settings, run.jobs, on_row,
                           on_progress=lambda: progress.update(1), previous=batch.previous,
                           context=worker_context(run.fork_workers), executor=executor)
             except (KeyboardInterrupt, Terminated) as stop:
                 stopped = stop  # every job has its row: the table is still written whole
-            try:
-                writer.close()
-            except OSError as error:
-                raise TableWriteError(error.strerror or str(error)) from None
-    except TableWriteError as error:
-        raise InputError(f"--table {table.path}: cannot write the table ({error})") from None
     finally:
         progress.close()
     return counts, stopped

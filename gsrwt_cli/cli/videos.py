@@ -8,7 +8,6 @@ it with the same table, signals and last line as a directory batch.
 
 from __future__ import annotations
 
-import contextlib
 import csv
 import math
 import os
@@ -31,8 +30,8 @@ from ..io.outputs import remove_stale_temporaries
 from ..io.storage import Location
 from ..io.targets import file_identity
 from ..tables.columns import VIDEO_COLUMNS
-from ..tables.writer import TableWriter, read_table
-from .batch_run import TableWriteError, Terminated, end_batch, open_table, stop_on_signals
+from ..tables.writer import read_table
+from .batch_run import Terminated, end_batch, recorded_rows, stop_on_signals
 from .options import InputError, prepare_directory, prepare_table
 
 
@@ -165,37 +164,21 @@ def _run(job: VideoJob, settings: Settings, table: Any, run: Any,
                     disable=run.quiet or not sys.stderr.isatty())
     counts = Counts()
     stopped: BaseException | None = None
+
+    def place(row: dict[str, Any]) -> str:
+        frame = row.get("frame")
+        return row["image"] + (f" frame {frame}" if frame is not None else "")
+
     try:
-        with stop_on_signals(), contextlib.ExitStack() as stack:
-            stream = stack.enter_context(open_table(table.path))
-            writer = TableWriter(stream, VIDEO_COLUMNS, table.format)
-
-            def on_row(row: dict[str, Any]) -> None:
-                try:
-                    writer.write_row(row)
-                except OSError as error:
-                    if table.path == "-":
-                        raise
-                    raise TableWriteError(error.strerror or str(error)) from None
-                counts.add(row)
-                if row["status"] == "error":
-                    frame = row.get("frame")
-                    at = f" frame {frame}" if frame is not None else ""
-                    progress.write(f"Error: {one_line(row['image'])}{at}: {row['error']}",
-                                   file=sys.stderr)
-
+        with stop_on_signals(), recorded_rows(
+                table.path, VIDEO_COLUMNS, table.format, counts,
+                lambda line: progress.write(line, file=sys.stderr), place) as on_row:
             try:
                 run_video(job, settings, run.jobs, on_row, on_progress=lambda: progress.update(1),
                           previous=previous, context=worker_context(False),
                           max_input_pixels=settings.max_input_pixels)
             except (KeyboardInterrupt, Terminated) as stop:
                 stopped = stop
-            try:
-                writer.close()
-            except OSError as error:
-                raise TableWriteError(error.strerror or str(error)) from None
-    except TableWriteError as error:
-        raise InputError(f"--table {table.path}: cannot write the table ({error})") from None
     finally:
         progress.close()
     return counts, stopped
