@@ -171,38 +171,19 @@ class ProcessExecutor(Generic[Item, Result]):
                 for worker in workers:
                     dispatch(worker, up_to)
             while any(worker.in_flight for worker in workers):
-                busy = [worker for worker in workers if worker.in_flight]
-                ready = set(wait([w.connection for w in busy] + [w.process.sentinel for w in busy]))
-                for worker in busy:
-                    index = worker.in_flight[0]
-                    if worker.connection in ready or worker.connection.poll():
-                        try:
-                            result = worker.connection.recv()
-                        except (EOFError, OSError):
-                            result = None
-                        else:
-                            worker.in_flight.popleft()
-                            dispatch(worker)
-                            yield index, result
-                            continue
-                    if worker.connection in ready or worker.process.sentinel in ready:
-                        # No result, and the process ended (or its pipe broke): it died on
-                        # its first item; the ones behind it were never started.
-                        worker.process.join(STOP_GRACE_SECONDS)
-                        reason = death_reason(worker.process.exitcode)
-                        self.deaths += 1
-                        if self.on_abandon is not None and worker.process.pid is not None:
-                            self.on_abandon(items[index], worker.process.pid)
-                        worker.connection.close()
-                        workers.remove(worker)
-                        worker.in_flight.popleft()
-                        queue.extendleft(reversed(worker.in_flight))
-                        yield index, self.on_death(items[index], reason)
-                        if queue:
-                            workers.append(self._start())
-                            dispatch(workers[-1])
-                        for other in workers:  # items put back go to whoever has room
-                            dispatch(other)
+                for worker, index, done, outcome in self._outcomes(workers):
+                    if done:
+                        dispatch(worker)
+                        yield index, outcome
+                        continue
+                    self._abandoned(items[index], worker)
+                    queue.extendleft(reversed(worker.in_flight))
+                    yield index, self.on_death(items[index], outcome)
+                    if queue:
+                        workers.append(self._start())
+                        dispatch(workers[-1])
+                    for other in workers:  # items put back go to whoever has room
+                        dispatch(other)
         finally:
             self._stop(workers, items)
 
@@ -262,44 +243,59 @@ class ProcessExecutor(Generic[Item, Result]):
                 for worker in workers:
                     dispatch(worker, up_to)
             while any(worker.in_flight for worker in workers):
-                busy = [worker for worker in workers if worker.in_flight]
-                ready = set(wait([w.connection for w in busy] + [w.process.sentinel for w in busy]))
-                for worker in busy:
-                    index = worker.in_flight[0]
-                    if worker.connection in ready or worker.connection.poll():
-                        try:
-                            result = worker.connection.recv()
-                        except (EOFError, OSError):
-                            result = None
-                        else:
-                            worker.in_flight.popleft()
-                            del held[index]
-                            yield index, result
-                            for other in workers:
-                                dispatch(other)
-                            continue
-                    if worker.connection in ready or worker.process.sentinel in ready:
-                        worker.process.join(STOP_GRACE_SECONDS)
-                        reason = death_reason(worker.process.exitcode)
-                        self.deaths += 1
-                        if self.on_abandon is not None and worker.process.pid is not None:
-                            self.on_abandon(held[index], worker.process.pid)
-                        senders.pop(id(worker)).close()
-                        worker.connection.close()
-                        workers.remove(worker)
-                        worker.in_flight.popleft()
-                        queue.extendleft(reversed(worker.in_flight))
-                        item = held.pop(index)
-                        yield index, self.on_death(item, reason)
-                        workers.append(self._start())
+                for worker, index, done, outcome in self._outcomes(workers):
+                    if done:
+                        del held[index]
+                        yield index, outcome
                         for other in workers:
                             dispatch(other)
+                        continue
+                    self._abandoned(held[index], worker)
+                    senders.pop(id(worker)).close()
+                    queue.extendleft(reversed(worker.in_flight))
+                    yield index, self.on_death(held.pop(index), outcome)
+                    workers.append(self._start())
+                    for other in workers:
+                        dispatch(other)
         finally:
             for sender in senders.values():
                 sender.close()
             self._stop(workers, _Held(held))  # a sender blocked on a pipe: its worker ends
             for sender in senders.values():
                 sender.thread.join(STOP_GRACE_SECONDS)
+
+    def _outcomes(self, workers: list[_Worker]) -> Iterator[tuple[_Worker, int, bool, Any]]:
+        """Wait until some busy worker has news, then give each one's: ``(worker, index,
+        True, result)`` for a result received (taken off its in-flight items), or ``(worker,
+        index, False, reason)`` for a worker that died on its first item (no result, and its
+        process ended or its pipe broke): joined, counted, its connection closed, taken out
+        of ``workers``; the items behind the first, never started, are left in its in-flight
+        list for the caller to put back."""
+        busy = [worker for worker in workers if worker.in_flight]
+        ready = set(wait([w.connection for w in busy] + [w.process.sentinel for w in busy]))
+        for worker in busy:
+            index = worker.in_flight[0]
+            if worker.connection in ready or worker.connection.poll():
+                try:
+                    result = worker.connection.recv()
+                except (EOFError, OSError):
+                    pass
+                else:
+                    worker.in_flight.popleft()
+                    yield worker, index, True, result
+                    continue
+            if worker.connection in ready or worker.process.sentinel in ready:
+                worker.process.join(STOP_GRACE_SECONDS)
+                self.deaths += 1
+                worker.connection.close()
+                workers.remove(worker)
+                worker.in_flight.popleft()
+                yield worker, index, False, death_reason(worker.process.exitcode)
+
+    def _abandoned(self, item: Item, worker: _Worker) -> None:
+        """Tell ``on_abandon`` of the item a dead worker was working on."""
+        if self.on_abandon is not None and worker.process.pid is not None:
+            self.on_abandon(item, worker.process.pid)
 
     def _stop(self, workers: list[_Worker], items: Sequence[Item]) -> None:
         """End every worker: politely if idle, with SIGTERM (then SIGKILL) if busy."""
