@@ -158,6 +158,25 @@ def _overlap(first: np.ndarray, second: np.ndarray) -> float:
     return float(area)
 
 
+def _fitted_line(points: np.ndarray) -> np.ndarray:
+    """The homogeneous line through ``points`` ``(N, 2)``, fitted by OpenCV (Huber)."""
+    vx, vy, x0, y0 = cv2.fitLine(points.astype(np.float32), cv2.DIST_HUBER, 0, 0.01,
+                                 0.01).ravel()
+    return np.cross([x0, y0, 1.0], [x0 + vx, y0 + vy, 1.0])
+
+
+def _meeting_points(lines: list[np.ndarray]) -> np.ndarray | None:
+    """Where each of four sides' lines meets the one before it: the corners ``(4, 2)``;
+    None when two adjacent sides are parallel."""
+    corners = []
+    for corner in range(4):
+        point = np.cross(lines[corner - 1], lines[corner])
+        if abs(point[2]) < 1e-12:
+            return None
+        corners.append(point[:2] / point[2])
+    return np.array(corners)
+
+
 def _snapped(points: np.ndarray, edge_points: np.ndarray, edge_gradients: np.ndarray
              ) -> np.ndarray | None:
     """A rough outline moved onto the edges it follows: for each side, the edge pixels
@@ -187,17 +206,9 @@ def _snapped(points: np.ndarray, edge_points: np.ndarray, edge_gradients: np.nda
                     & (np.abs(edge_gradients @ normal) >= least_cosine))
             if near.sum() < max(8, 0.2 * length):
                 return None
-            vx, vy, x0, y0 = cv2.fitLine(edge_points[near].astype(np.float32), cv2.DIST_HUBER,
-                                         0, 0.01, 0.01).ravel()
-            lines.append(np.cross([x0, y0, 1.0], [x0 + vx, y0 + vy, 1.0]))
-        corners = []
-        for corner in range(4):
-            point = np.cross(lines[corner - 1], lines[corner])
-            if abs(point[2]) < 1e-12:
-                return None
-            corners.append(point[:2] / point[2])
-        moved = np.array(corners)
-        if not cv2.isContourConvex(moved.astype(np.float32).reshape(-1, 1, 2)):
+            lines.append(_fitted_line(edge_points[near]))
+        moved = _meeting_points(lines)
+        if moved is None or not cv2.isContourConvex(moved.astype(np.float32).reshape(-1, 1, 2)):
             return None
         points = ordered_corners(moved)
     return points
@@ -306,16 +317,10 @@ def _refined(grey: np.ndarray, corners: np.ndarray, reach: float) -> np.ndarray:
         if keep.sum() < 8:
             lines.append(np.cross([*start, 1.0], [*end, 1.0]))
             continue
-        vx, vy, x0, y0 = cv2.fitLine(points[keep].astype(np.float32), cv2.DIST_HUBER, 0, 0.01,
-                                     0.01).ravel()
-        lines.append(np.cross([x0, y0, 1.0], [x0 + vx, y0 + vy, 1.0]))
-    refined = []
-    for corner in range(4):
-        point = np.cross(lines[corner - 1], lines[corner])
-        if abs(point[2]) < 1e-12:
-            return corners
-        refined.append(point[:2] / point[2])
-    refined_array = np.array(refined)
+        lines.append(_fitted_line(points[keep]))
+    refined_array = _meeting_points(lines)
+    if refined_array is None:
+        return corners
     if np.abs(refined_array - corners).max() > 2 * reach:
         return corners  # the fit left the edge it started on
     return refined_array
