@@ -371,7 +371,10 @@ def dask_executor(address: str, processes: int, retries: int,
     """A :class:`~gsrwt_cli.batch.dask_executor.DaskExecutor` on the scheduler at ``address``
     (``local``: a local cluster of ``processes`` workers), or an :class:`InputError` saying
     how to install Dask or that the scheduler cannot be reached."""
-    os.environ.setdefault("DASK_LOGGING__DISTRIBUTED", "error")  # workers inherit it
+    # Workers inherit it. Critical, not error: a worker whose heartbeat meets the cluster
+    # closing after Ctrl-C logs that at ERROR with a traceback (distributed's own race);
+    # what a user needs to know about a worker arrives as a row or as our one line.
+    os.environ.setdefault("DASK_LOGGING__DISTRIBUTED", "critical")
     try:
         from ..batch import dask_executor as engine
     except ImportError as error:
