@@ -140,6 +140,8 @@ def made_with(values: Mapping[str, Any] | None, wall: str | None, settings: Sett
                   else f"{_number(framing.px_per_unit)}px/unit"))
     if framing.max_size is not None:
         words.append(("max_size", "x".join(map(str, framing.max_size))))
+    if framing.max_area is not None and box != "frontal":  # the input's size: never lowered
+        words.append(("max_area", _number(framing.max_area)))
     words += [("interpolation", settings.interpolation),
               ("antialias", "on" if settings.antialias else "off"),
               ("fill", _number(settings.fill)), ("alpha", "on" if settings.alpha else "off")]

@@ -48,6 +48,7 @@ from ..batch.video_jobs import CODEC_CHOICES as VIDEO_CODEC_CHOICES
 from ..batch.video_jobs import DEFAULT_MAX_POSE_GAP
 from ..batch.video_jobs import TIME_MODES as VIDEO_TIME_MODES
 from ..geometry.framing import (
+    DEFAULT_MAX_AREA,
     EmptyOutputError,
     FrameOutsideImageError,
     Framing,
@@ -419,7 +420,8 @@ def dask_executor(address: str, processes: int, retries: int,
               help="With --bbox full or crop: stop where the image is magnified more than "
                    "this many times the magnification at its centre.")
 @click.option("--scale", type=Number(), default=None,
-              help="Output pixels per frontal pixel [default: 1].")
+              help="Output pixels per frontal pixel [default: 1, lowered until the output "
+                   "has at most twice the input's pixels].")
 @click.option("--px-per-unit", type=Number(), default=None,
               help="Metric output: pixels per unit of the image's 'distance'.")
 @click.option("--max-pixels", default="50M", show_default=True,
@@ -616,7 +618,9 @@ def settings_from_options(outdir: Path | Location, options: dict[str, Any]
                         max_stretch=max_stretch,
                         max_pixels=parse_pixel_count(options.pop("max_pixels"), "--max-pixels"),
                         max_size=size_limit, margin=options.pop("margin"),
-                        crop_aspect=crop_aspect),
+                        crop_aspect=crop_aspect,
+                        max_area=(DEFAULT_MAX_AREA if scale is None and px_per_unit is None
+                                  and size_limit is None else None)),
         interpolation=options.pop("interpolation"), fill=options.pop("fill"), alpha=alpha,
         quality=options.pop("quality"), overwrite=options.pop("overwrite"),
         dry_run=options.pop("dry_run"),

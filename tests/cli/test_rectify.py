@@ -176,7 +176,7 @@ def test_vanishing_line_across_the_image_both_bbox_modes(tmp_path):
     before = snapshot(folder)
     common = ["--pan", "80", "--tilt", "0", "--focal", "280", "--fill", "7", "-j", "1"]
     frontal = run_gsrwt("rectify", str(folder), *common, "-o", str(tmp_path / "frontal"))
-    full = run_gsrwt("rectify", str(folder), *common, "--bbox", "full", "-o",
+    full = run_gsrwt("rectify", str(folder), *common, "--bbox", "full", "--scale", "1", "-o",
                      str(tmp_path / "full"))
     assert frontal.returncode == 0 and full.returncode == 0, frontal.stderr + full.stderr
     for result, name in ((frontal, "frontal"), (full, "full")):
@@ -210,6 +210,37 @@ def test_vanishing_line_across_the_image_both_bbox_modes(tmp_path):
     inside = frontal_output != 7
     assert np.abs(crop - frontal_output.astype(int))[inside].mean() < 1
     assert snapshot(folder) == before
+
+
+def test_a_full_frame_is_at_most_twice_the_inputs_pixels_unless_the_scale_is_asked(tmp_path):
+    """At pan 60 the whole visible wall is over four times the photo's pixels at frontal
+    resolution; without --scale its scale is lowered until it has at most twice as many,
+    the shape kept, and the pixels are those of the frame at scale 1, made smaller."""
+    folder = tmp_path / "in"
+    folder.mkdir()
+    width, height = 320, 240
+    image, _, _ = render_view(TEXTURE, 60, 15, 280, width, height, 159.5, 119.5, DISTANCE)
+    write_image(folder / "p60.png", image)
+    common = ["--pan", "60", "--tilt", "15", "--focal", "280", "--bbox", "full", "-j", "1"]
+    assert run_gsrwt("rectify", str(folder), *common, "--scale", "1",
+                     "-o", str(tmp_path / "asked")).returncode == 0
+    assert run_gsrwt("rectify", str(folder), *common,
+                     "-o", str(tmp_path / "capped")).returncode == 0
+    asked = by_image_name(read_table(tmp_path / "asked" / "gsrwt.csv"))["p60.png"]
+    capped = by_image_name(read_table(tmp_path / "capped" / "gsrwt.csv"))["p60.png"]
+    asked_size = int(asked["out_width"]), int(asked["out_height"])
+    capped_size = int(capped["out_width"]), int(capped["out_height"])
+    assert asked_size[0] * asked_size[1] > 4 * width * height
+    assert 1.9 * width * height < capped_size[0] * capped_size[1] <= 2 * width * height
+    assert abs(capped_size[0] / capped_size[1] - asked_size[0] / asked_size[1]) < 0.02
+    scale = float(capped["scale"])
+    assert float(asked["scale"]) == 1 and abs(scale - capped_size[0] / asked_size[0]) < 0.01
+    assert "max_area=2" in capped["made_with"]
+    smaller = cv2.resize(read_image(tmp_path / "asked" / "p60.png"), capped_size,
+                         interpolation=cv2.INTER_AREA)
+    output = read_image(tmp_path / "capped" / "p60.png")
+    inside = cv2.erode((smaller.max(axis=2) > 0).astype(np.uint8), np.ones((5, 5))) > 0
+    assert psnr(output, smaller, inside) > 30
 
 
 def test_depths_channels_and_unusual_names(tmp_path):
