@@ -99,6 +99,9 @@ def rectify_video(inputs: tuple[str, ...], outdir: Path | Location, poses: str,
     """Check, run and end a video run (the command's exit status and last line)."""
     if isinstance(outdir, Location):
         raise InputError(f"-o {outdir}: videos are written to a local directory only")
+    if codec == "bag":
+        raise click.BadParameter("bag writes a ROS bag's rectified topic: it needs a bag as "
+                                 f"INPUT, not the video {inputs[0]}", param_hint="'--codec'")
     check_max_pose_gap(max_gap)
     source = Path(inputs[0])
     if not source.is_file():
@@ -108,9 +111,6 @@ def rectify_video(inputs: tuple[str, ...], outdir: Path | Location, poses: str,
         import_av()
     except VideoError as error:
         raise InputError(f"{inputs[0]}: {error}") from None
-    if codec == "bag":
-        raise click.BadParameter("bag writes a ROS bag's rectified topic: it needs a bag as "
-                                 f"INPUT, not the video {inputs[0]}", param_hint="'--codec'")
     check_codec(codec, settings)
     log = read_pose_log(poses, max_gap)
     fallback = view_fallback(view_kwargs)

@@ -238,11 +238,17 @@ def test_a_bag_output_holds_the_rectified_topic_and_its_camera(tmp_path: Path,
         np.testing.assert_array_equal(pixels, expected)
         k = np.asarray(info.k, float).reshape(3, 3)
         assert (info.width, info.height) == (message.width, message.height)
-        frontal, seen, _ = render_view(texture, 0.0, 0.0, k[0, 0], message.width,
-                                       message.height, k[0, 2], k[1, 2], centre=(0.0, 0.0))
-        mask = seen & pixels.any(axis=2)
-        assert mask.mean() > 0.5
-        assert psnr(pixels, frontal, mask) >= 30
+        assert k[0, 0] == pytest.approx(FOCAL) and k[1, 1] == pytest.approx(FOCAL)
+        scores = []
+        for shift in (0.0, 1.0):  # a camera a pixel off sees another picture
+            frontal, seen, _ = render_view(texture, 0.0, 0.0, k[0, 0], message.width,
+                                           message.height, k[0, 2] + shift, k[1, 2],
+                                           centre=(0.0, 0.0))
+            inside = (seen & pixels.any(axis=2)).astype(np.uint8)  # less the blended edge
+            mask = cv2.erode(inside, np.ones((5, 5), np.uint8)).astype(bool)
+            assert mask.mean() > 0.5
+            scores.append(psnr(pixels, frontal, mask))
+        assert scores[0] >= 33 and scores[1] < 30, scores
     rerun = run_gsrwt(*args, "--codec", "bag", "-o", tmp_path / "out")
     assert rerun.returncode == 0, rerun.stderr
     assert {row["status"] for row in read_table(tmp_path / "out" / "walk.csv")} == {"skipped"}
@@ -312,7 +318,7 @@ def test_a_bag_without_camera_info(tmp_path: Path, renders) -> None:
         assert result.returncode == 0, result.stderr
         rows = read_table(out / "walk.csv")
         assert {row["focal_source"] for row in rows} == {source}
-        assert {float(row["focal"]) for row in rows} == {FOCAL}
+        assert {float(row["focal_px"]) for row in rows} == {FOCAL}
 
 
 def test_bad_requests_are_one_line(tmp_path: Path, renders) -> None:
@@ -349,9 +355,9 @@ def test_bad_requests_are_one_line(tmp_path: Path, renders) -> None:
     ]:
         result = run_gsrwt("rectify", *args)
         assert result.returncode == 2, (args, result.stderr)
-        assert words in result.stderr, (words, result.stderr)
         assert "Traceback" not in result.stderr
-        assert len(result.stderr.strip().splitlines()) == 1, result.stderr
+        errors = [line for line in result.stderr.splitlines() if line.startswith("Error: ")]
+        assert len(errors) == 1 and words in errors[0], (words, result.stderr)
     assert not out.exists()
     video = run_gsrwt("rectify", tmp_path / "x.mkv", "--poses", tmp_path / "p.csv",
                       "--codec", "bag", "-o", out)
