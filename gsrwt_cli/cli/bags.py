@@ -162,6 +162,7 @@ def rectify_bag(inputs: tuple[str, ...], outdir: Path | Location, options: BagOp
     output = output_of(bag, outdir, codec)
     words = stream_words(fallback, settings, codec, output) + (
         f" topic={options.topic} {pose_words} max_pose_gap={max_gap:g} codec={codec}"
+        + (f" camera_info={options.camera_info_topic}" if options.camera_info_topic else "")
         + (" steady=on" if steady else ""))
     job = StreamJob(bag, output, codec, frame_poses,
                     partial(BagSource, bag, options.topic, settings.max_input_pixels),

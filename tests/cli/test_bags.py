@@ -193,6 +193,7 @@ def test_a_tf_chain_through_the_pan_tilt_unit(tmp_path: Path, renders) -> None:
     assert {row["status"] for row in rows} == {"ok"} and len(rows) == COUNT
     for row, (pan, tilt, roll) in zip(rows, _true_poses()):
         assert float(row["pan_deg"]) == pytest.approx(pan, abs=1e-4)
+        assert float(row["tilt_deg"]) == pytest.approx(tilt, abs=1e-4)
         assert float(row["roll_deg"]) == pytest.approx(roll, abs=1e-4)
     import av
 
@@ -283,6 +284,17 @@ def test_poses_with_a_gap_and_out_of_order(tmp_path: Path, renders) -> None:
         tables.append([(row["pan_deg"], row["tilt_deg"], row["roll_deg"])
                        for row in read_table(tmp_path / name / f"{name}.csv")])
     assert tables[0] == tables[1]
+    # The same poses as a pose file (seconds from the first frame): the same table.
+    lines = ["time,pan,tilt"] + [f"{frame / 10!r},{float(pan)!r},{float(tilt)!r}"
+                                 for frame, (pan, tilt, _) in zip(KEY_FRAMES, _key_poses())]
+    (tmp_path / "poses.csv").write_text("\n".join(lines) + "\n")
+    result = run_gsrwt("rectify", bag_path(tmp_path, "mcap", "ordered"), "--topic",
+                       "/camera/image_raw", "--poses", tmp_path / "poses.csv", "--codec", "png",
+                       "-o", tmp_path / "log", "-j", "1")
+    assert result.returncode == 0, result.stderr
+    rows = read_table(tmp_path / "log" / "ordered.csv")
+    assert [(row["pan_deg"], row["tilt_deg"], row["roll_deg"]) for row in rows] == tables[0]
+    assert {row["pose_source"] for row in rows} == {"poses"}
 
     bag = bag_path(tmp_path, "mcap", "gap")
     kept = [0, 6, 8]  # the unit went quiet between frames 0 and 6
