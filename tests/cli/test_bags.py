@@ -270,6 +270,31 @@ def test_a_corrupt_frame_is_its_row_alone(tmp_path: Path, renders) -> None:
     assert "Traceback" not in result.stderr
 
 
+def test_a_bag_damaged_mid_stream_gives_its_frames_then_an_error_row(tmp_path: Path,
+                                                                     renders) -> None:
+    """Bytes overwritten halfway through a ROS 1 bag (its poses all written before them):
+    the frames before the damage are rows, then one error row; exit 1."""
+    many = 40
+    bag = bag_path(tmp_path, "ros1")
+    small = [cv2.resize(image, (WIDTH // 2, HEIGHT // 2)) for image in renders]
+    _write_bag(bag, "ros1", small, count=many, joint_frames=[0, many - 1],
+               camera_info=False)
+    with open(bag, "r+b") as handle:
+        handle.seek(bag.stat().st_size // 2)
+        handle.write(b"\xff" * 50_000)  # several messages, their headers too
+    result = run_gsrwt("rectify", bag, "--topic", "/camera/image_raw", "--pose-topic",
+                       "/joint_states", "--joints", "ptu_pan,ptu_tilt", "--focal", str(FOCAL / 2),
+                       "--max-pose-gap", "10", "--codec", "png", "-o", tmp_path / "out",
+                       "-j", "1")
+    assert result.returncode == 1, result.stderr
+    rows = read_table(tmp_path / "out" / "walk.csv")
+    assert 5 < len(rows) < many
+    assert [int(row["frame"]) for row in rows] == list(range(len(rows)))
+    assert rows[-1]["status"] == "error" and "damaged at message" in rows[-1]["error"]
+    assert {row["status"] for row in rows[:5]} == {"ok"}
+    assert "Traceback" not in result.stderr
+
+
 def test_poses_with_a_gap_and_out_of_order(tmp_path: Path, renders) -> None:
     """JointState stamps written shuffled give the table of those written in order; a gap
     in them makes error rows of exactly the frames beyond --max-pose-gap."""
