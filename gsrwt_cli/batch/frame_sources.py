@@ -26,7 +26,7 @@ import numpy as np
 from ..geometry.camera import Intrinsics
 from ..geometry.rotations import PoseError, pose_from_rotation
 from ..geometry.timeline import PoseGapError, PoseSample, Timeline
-from ..inputs.bags import BagError, PoseSamples, image_frames
+from ..inputs.bags import DamagedBagError, PoseSamples, image_frames
 from ..inputs.pose_log import PoseLog
 from ..inputs.records import merge_values
 from ..inputs.videos import FrameFailure, VideoError, VideoReader
@@ -118,8 +118,6 @@ class BagSource:
         self._frames: Iterator[Any] | None = None
 
     def frames(self) -> Iterator[StreamFrame]:
-        from ..inputs.bags import DamagedBagError
-
         self._frames = image_frames(self.bag, self.topic)
         first: int | None = None
         while True:
@@ -289,14 +287,3 @@ def camera_values(intrinsics: Intrinsics) -> dict[str, Any]:
         values.update(dict(intrinsics.lens.coefficients))
     return values
 
-
-def check_bag_source(bag: Path, topic: str) -> None:
-    """:class:`~gsrwt_cli.inputs.bags.BagError` unless ``topic`` is an image topic of ``bag``
-    whose first frame can be read (the topic's faults, found before any work)."""
-    frames = image_frames(bag, topic)
-    try:
-        next(frames, None)
-    except BagError:
-        raise
-    finally:
-        frames.close()
