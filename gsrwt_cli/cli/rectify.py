@@ -493,13 +493,14 @@ def dask_executor(address: str, processes: int, retries: int,
 @click.option("--time", "time_mode", type=click.Choice(VIDEO_TIME_MODES), default="relative",
               show_default=True,
               help="With --poses: the time column counts seconds from the first frame, or "
-                   "is on the video's own clock (absolute: pts x time_base).")
+                   "is on the input's own clock (absolute: a video's pts x time_base, a "
+                   "bag's header stamps in seconds).")
 @click.option("--max-pose-gap", type=Number(min=0), default=DEFAULT_MAX_POSE_GAP,
               show_default=True,
-              help="With --poses: a frame further than this many seconds from every pose "
-                   "is an error row.")
+              help="With --poses or --pose-topic: a frame further than this many seconds "
+                   "from every pose is an error row.")
 @click.option("--steady", is_flag=True,
-              help="With --poses: frame every frame on the wall the first frame's default "
+              help="A video's or bag's: frame every frame on the wall the first frame's default "
                    "frame shows, so that the wall stands still in the output (one focal "
                    "length), instead of each frame's own default frame.")
 @click.option("--codec", type=click.Choice(VIDEO_CODEC_CHOICES), default="h264",
