@@ -1,7 +1,10 @@
-"""Videos: every frame rectified with the pose of its moment, into a video or image sequence.
+"""Streams (a video, a ROS bag's image topic): every frame rectified with the pose of its
+moment, into a video, an image sequence or a bag.
 
-The main process decodes (:class:`~gsrwt_cli.inputs.videos.VideoReader`), finds each frame's
-pose in the pose log (:class:`~gsrwt_cli.geometry.timeline.Timeline`) and encodes; the frames
+The main process decodes (a :class:`~gsrwt_cli.batch.frame_sources.FrameSource`: a video
+file or a bag's image topic), finds each frame's pose
+(:class:`~gsrwt_cli.batch.frame_sources.FramePoses`: a pose log, or a bag's pose topic,
+through a :class:`~gsrwt_cli.geometry.timeline.Timeline`) and encodes; the frames
 are warped by the workers (:class:`FrameWorker`, the same plan and warp as a still image:
 :func:`~gsrwt_cli.api.rectify.plan_image` and
 :func:`~gsrwt_cli.imaging.images.warp_image`), at most
@@ -11,24 +14,28 @@ map_stream`). Every frame gets a row (:data:`~gsrwt_cli.tables.columns.VIDEO_COL
 order; a file cut short adds an error row after its last frame.
 
 Outputs: ``h264`` and ``ffv1`` videos are encoded into a temporary file beside the output and
-renamed when the whole video is done (:func:`~gsrwt_cli.io.outputs.open_atomic`), so a run
-that is stopped or killed leaves no file under the output's name; ``png`` writes
-``NAME/000000.png`` (six digits or more), each frame whole as it is done.
+renamed when the whole video is done (:func:`~gsrwt_cli.io.outputs.open_atomic`), and a
+``bag`` (the rectified image topic and the frontal camera's ``camera_info``,
+:func:`~gsrwt_cli.inputs.bags.write_bag`) is written in a temporary directory beside it and
+renamed, so a run that is stopped or killed leaves nothing under the output's name; ``png``
+writes ``NAME/000000.png`` (six digits or more), each frame whole as it is done.
 
 Reruns: a video output that exists and that the previous table records, frame by frame, as
 made with these options (the ``made_with`` cell, the pose file's digest included) is
-skipped whole; one that exists otherwise is an error (``--overwrite`` redoes it). An image
-sequence continues: a frame whose file exists and is recorded so is skipped (still decoded,
-not warped); one whose file exists without a record is made again in memory and compared.
+skipped whole (a bag likewise); one that exists otherwise is an error (``--overwrite``
+redoes it). An image sequence continues: a frame whose file exists and is recorded so is
+skipped (still decoded, not warped); one whose file exists without a record is made again
+in memory and compared.
 """
 
 from __future__ import annotations
 
 import contextlib
-import math
 import multiprocessing
 import os
 import queue
+import secrets
+import shutil
 import threading
 import warnings
 from collections.abc import Callable, Iterator, Mapping, Sequence
@@ -40,23 +47,34 @@ import numpy as np
 
 from ..api.rectify import plan_image, view_for_image
 from ..geometry.framing import steady_box
-from ..geometry.rotations import PoseError, pose_from_rotation
-from ..geometry.timeline import PoseGapError, Timeline
 from ..imaging.images import encode_image, warp_image
-from ..inputs.pose_log import PoseLog
-from ..inputs.records import RecordError, merge_values, view_from_values
-from ..inputs.videos import FrameFailure, VideoError, VideoFrame, VideoReader
-from ..io.outputs import open_atomic, remove_stale_temporaries, write_atomic
+from ..inputs.records import RecordError, view_from_values
+from ..io.outputs import (
+    TEMPORARY_PATTERN,
+    open_atomic,
+    remove_stale_temporaries,
+    temporary_target,
+    write_atomic,
+)
 from ..tables.rows import params_row, plan_row
 from .executor import ProcessExecutor
+from .frame_sources import (
+    CachedTimeline,
+    FramePoses,
+    FrameSource,
+    LogPoses,
+    SourceEndedError,
+    StreamFrame,
+    TopicPoses,
+)
 from .job_errors import JobError, error_text
 from .rectify_jobs import NOT_MADE_SO, Counts
 from .settings import Settings
 from .workers import ProcessWorker
 
-#: ``--codec``: the video codecs (:data:`~gsrwt_cli.imaging.videos.VIDEO_CODECS`) and ``png``,
-#: an image sequence.
-CODEC_CHOICES = ("h264", "ffv1", "png")
+#: ``--codec``: the video codecs (:data:`~gsrwt_cli.imaging.videos.VIDEO_CODECS`), ``png``,
+#: an image sequence, and ``bag``, a ROS bag (a bag's input only).
+CODEC_CHOICES = ("h264", "ffv1", "png", "bag")
 #: ``--time``: the pose file's ``time`` counts from the first frame, or on the container's
 #: own clock (``pts * time_base``).
 TIME_MODES = ("relative", "absolute")
@@ -69,21 +87,21 @@ Row = dict[str, Any]
 
 
 @dataclass(frozen=True)
-class VideoJob:
-    """One video to rectify: its file, the output (a video file, or the directory of an
-    image sequence), the codec, its poses and how their times are read, the view options
-    (``fallback``), and what makes its output (``made_with``)."""
+class StreamJob:
+    """One stream to rectify: its file (a video, a bag: the table's ``image``), how to open
+    its frames (``open_source``), the output (a video or bag, or the directory of an image
+    sequence), the codec, its poses (with the view options and the bag's camera), and what
+    makes its output (``made_with``); ``topic``: a bag output's image topic."""
 
     source: Path
     output: Path
     codec: str
-    poses: PoseLog
-    time_mode: str = "relative"
-    max_gap: float = DEFAULT_MAX_POSE_GAP
-    fallback: Mapping[str, Any] = field(default_factory=dict)
+    poses: LogPoses | TopicPoses
+    open_source: Callable[[], FrameSource]
     made_with: str = ""
     #: ``--steady``: every frame framed on the wall the first frame's default frame shows.
     steady: bool = False
+    topic: str | None = None
 
 
 @dataclass(frozen=True)
@@ -107,15 +125,23 @@ class FrameJob:
     record: Mapping[str, Any] | None = None
     #: ``--steady``: the view values of the video's first frame, whose frame every frame keeps.
     steady_from: Mapping[str, Any] | None = None
+    #: A bag output: the output's camera matrix comes back with the pixels (``_camera``).
+    camera: bool = False
+    pose_source: str = "poses"
 
 
 def output_of(source: Path, outdir: Path, codec: str) -> Path:
-    """Where a video's output goes: ``OUTDIR/NAME.mp4`` (h264), ``OUTDIR/NAME.mkv`` (ffv1)
-    or the directory ``OUTDIR/NAME`` (png)."""
+    """Where a stream's output goes: ``OUTDIR/NAME.mp4`` (h264), ``OUTDIR/NAME.mkv``
+    (ffv1), the directory ``OUTDIR/NAME`` (png), or for a bag ``OUTDIR/NAME.bag`` (a ROS 1
+    input) or the ROS 2 bag directory ``OUTDIR/NAME`` (MCAP)."""
+    stem = outdir / (source.stem if source.suffix else source.name)
+    if codec == "png":
+        return stem
+    if codec == "bag":
+        return stem.with_suffix(".bag") if source.suffix == ".bag" else stem
     from ..imaging.videos import VIDEO_CODECS
 
-    stem = outdir / source.stem
-    return stem if codec == "png" else stem.with_suffix(VIDEO_CODECS[codec].extension)
+    return stem.with_suffix(VIDEO_CODECS[codec].extension)
 
 
 def frame_file(directory: Path, index: int) -> Path:
@@ -125,7 +151,8 @@ def frame_file(directory: Path, index: int) -> Path:
 
 def process_frame(job: FrameJob, settings: Settings, made_with: str) -> Row:
     """Rectify one frame and return its row (with ``_pixels``, the warped frame, when it
-    goes to the encoder); never raises for a bad frame."""
+    goes to the encoder, and ``_camera``, its camera matrix, for a bag); never raises for a
+    bad frame."""
     row: Row = {"image": job.image, "frame": job.index, "time": job.time,
                 "output": job.shown_output}
     try:
@@ -141,7 +168,7 @@ def process_frame(job: FrameJob, settings: Settings, made_with: str) -> Row:
             except RecordError as error:
                 raise JobError(str(error)) from None
             row.update(params_row(view, job.image), focal_source=job.focal_source,
-                       pose_source="poses")
+                       pose_source=job.pose_source)
             height, width = job.pixels.shape[:2]
             framing = settings.framing
             if job.steady_from is not None:
@@ -166,6 +193,8 @@ def process_frame(job: FrameJob, settings: Settings, made_with: str) -> Row:
                     write_atomic(job.output, encoded, root=settings.root)
             else:
                 row["_pixels"] = warped
+                if job.camera:
+                    row["_camera"] = plan.output_camera()[0]
         row.update(plan_row(plan), image=job.image, made_with=made_with, status=status)
     except Exception as error:  # every failure of one frame is that frame's row
         row.update(status="error", error=error_text(error, settings.describe))
@@ -173,7 +202,7 @@ def process_frame(job: FrameJob, settings: Settings, made_with: str) -> Row:
 
 
 class FrameWorker(ProcessWorker):
-    """One video worker: the settings and the ``made_with`` of the video's output."""
+    """One stream worker: the settings and the ``made_with`` of the stream's output."""
 
     def __init__(self, settings: Settings, made_with: str, opencv_threads: int = 0) -> None:
         super().__init__(opencv_threads)
@@ -208,52 +237,36 @@ def _remove_temporaries_of(job: FrameJob, pid: int) -> None:
 
 @dataclass
 class _Decoding:
-    """What the decoding loop learnt: the frame count, and why it stopped early."""
+    """What the decoding loop learnt: the frame count, why it stopped early, each frame's
+    output timestamps (``pts`` for a video, ``stamp_ns`` for a bag)."""
 
     frames: int = 0
     end_error: str | None = None
     pts: dict[int, int | None] = field(default_factory=dict)
+    stamps: dict[int, int | None] = field(default_factory=dict)
     steady_from: Mapping[str, Any] | None = None  # --steady: the first frame's values
 
 
-def _frame_values(job: VideoJob, timeline: Timeline, moment: float, index: int
-                  ) -> tuple[dict[str, Any], str, str]:
-    """The view values of the frame at ``moment`` on the pose file's clock, where they came
-    from, and its focal length's source; :class:`JobError` for a frame without a pose."""
-    where = f"{job.poses.path.name} at frame {index} ({moment:.6g} s)"
-    try:
-        at = timeline.at(moment)
-        pose = pose_from_rotation(at.rotation)
-    except (PoseGapError, PoseError) as error:
-        raise JobError(f"{job.poses.path.name}: {error}") from None
-    own = {**at.numbers, "pan": pose.pan, "tilt": pose.tilt, "roll": pose.roll}
-    values = merge_values(own, job.poses.defaults, job.fallback)
-    if {"focal", "fx"} & (set(at.numbers) | set(job.poses.defaults)):
-        source = "poses"
-    elif job.fallback.get("focal") is not None or job.fallback.get("fx") is not None:
-        source = "option"
-    else:
-        source = "camera" if job.fallback.get("camera") else "option"
-    return values, where, source
-
-
-def run_video(job: VideoJob, settings: Settings, processes: int,
-              on_row: Callable[[Row], None], *,
-              on_progress: Callable[[], None] | None = None,
-              previous: Sequence[Mapping[str, Any]] = (),
-              context: multiprocessing.context.BaseContext | None = None,
-              max_input_pixels: float = math.inf) -> Counts:
-    """Rectify every frame of ``job``'s video and hand each row to ``on_row``, in frame
-    order; returns the counts. ``previous``: the last table's rows of this video.
+def run_stream(job: StreamJob, settings: Settings, processes: int,
+               on_row: Callable[[Row], None], *,
+               on_progress: Callable[[], None] | None = None,
+               previous: Sequence[Mapping[str, Any]] = (),
+               context: multiprocessing.context.BaseContext | None = None) -> Counts:
+    """Rectify every frame of ``job``'s stream and hand each row to ``on_row``, in frame
+    order; returns the counts. ``previous``: the last table's rows of this stream.
 
     A stop (``KeyboardInterrupt``, SIGTERM's exception) ends the workers and goes on after
     the rows of the frames decoded so far: ``interrupted``, every one of them for a video
-    (whose file is then not written), those not done for an image sequence.
+    or bag (whose file is then not written), those not done for an image sequence.
     """
+    from ..inputs.bags import BagError
+    from ..inputs.videos import VideoError
+
     counts = Counts()
 
     def deliver(row: Row) -> None:
         row.pop("_pixels", None)
+        row.pop("_camera", None)
         counts.add(row)
         on_row(row)
 
@@ -264,25 +277,27 @@ def run_video(job: VideoJob, settings: Settings, processes: int,
             deliver(row)
         return counts
     try:
-        reader = VideoReader(job.source, max_input_pixels)
-    except VideoError as error:
+        source = job.open_source()
+    except (VideoError, BagError) as error:
         deliver({"image": image, "output": shown, "status": "error", "error": str(error)})
         return counts
-    timeline = job.poses.timeline(job.max_gap)
-    with reader:
+    poses = CachedTimeline(job.poses)
+    try:
         if job.codec == "png":
-            _run(job, settings, processes, reader, timeline, deliver, on_progress, previous,
+            _run(job, settings, processes, source, poses, deliver, on_progress, previous,
                  context, None)
         else:
-            _run_encoded(job, settings, processes, reader, timeline, deliver, on_progress,
+            _run_encoded(job, settings, processes, source, poses, deliver, on_progress,
                          context)
+    finally:
+        source.close()
     return counts
 
 
-def _rows_of_finished_video(job: VideoJob, previous: Sequence[Mapping[str, Any]],
+def _rows_of_finished_video(job: StreamJob, previous: Sequence[Mapping[str, Any]],
                             shown: str) -> list[Row]:
-    """The rows of a video output that exists: the previous table's, ``skipped``, when they
-    record it whole as made with these options; else one error row."""
+    """The rows of a video or bag output that exists: the previous table's, ``skipped``,
+    when they record it whole as made with these options; else one error row."""
     rows = [dict(row) for row in previous if row.get("output") == shown]
     complete = bool(rows) and all(
         row.get("made_with") in (None, "", job.made_with) and row.get("status") in (
@@ -304,31 +319,33 @@ class _NothingWrittenError(Exception):
     """No frame reached the encoder: no file is made."""
 
 
-def _run_encoded(job: VideoJob, settings: Settings, processes: int, reader: VideoReader,
-                 timeline: Timeline, deliver: Callable[[Row], None],
+def _run_encoded(job: StreamJob, settings: Settings, processes: int, source: FrameSource,
+                 poses: FramePoses, deliver: Callable[[Row], None],
                  on_progress: Callable[[], None] | None,
                  context: multiprocessing.context.BaseContext | None) -> None:
-    """A video output: rows held until the file is whole (a stopped run's are
+    """A video or bag output: rows held until the file is whole (a stopped run's are
     ``interrupted``: its file is not written)."""
-    from ..imaging.videos import VIDEO_CODECS, VideoEncodeError, VideoEncoder
+    from ..imaging.videos import VideoEncodeError
 
     held: list[Row] = []
     try:
-        with open_atomic(job.output, "wb", root=settings.root) as handle:
-            encoder = VideoEncoder(handle, VIDEO_CODECS[job.codec], reader.info.time_base,
-                                   reader.info.rate)
+        with _output_sink(job, settings, source) as encoder:
             decoding = _Decoding()
             writer = _EncoderThread(encoder, (VideoEncodeError, ValueError))
 
             def encode(row: Row) -> None:
                 pixels = row.pop("_pixels", None)
+                camera = row.pop("_camera", None)
                 pts = decoding.pts.pop(row.get("frame"), None)
+                stamp = decoding.stamps.pop(row.get("frame"), None)
                 if pixels is not None and row["status"] == "ok":
-                    writer.put(row, pixels, pts if pts is not None else row["frame"])
+                    key: Any = (stamp, camera) if job.codec == "bag" else (
+                        pts if pts is not None else row["frame"])
+                    writer.put(row, pixels, key)
                 held.append(row)
 
             try:
-                _run(job, settings, processes, reader, timeline, encode, on_progress, (),
+                _run(job, settings, processes, source, poses, encode, on_progress, (),
                      context, decoding)
                 writer.finish()
                 if encoder.frames == 0:
@@ -345,7 +362,7 @@ def _run_encoded(job: VideoJob, settings: Settings, processes: int, reader: Vide
         for row in held:
             if row["status"] == "ok" and failed:
                 row.update(status="error",
-                           error=f"the video could not be written: {error_text(stop)}")
+                           error=f"the output could not be written: {error_text(stop)}")
             elif row["status"] == "ok":
                 row.update(status="interrupted", error="not done: the run was interrupted")
             deliver(row)
@@ -354,6 +371,108 @@ def _run_encoded(job: VideoJob, settings: Settings, processes: int, reader: Vide
         return
     for row in held:
         deliver(row)
+
+
+@contextlib.contextmanager
+def _output_sink(job: StreamJob, settings: Settings, source: FrameSource) -> Iterator[Any]:
+    """The encoder of a video output (into :func:`open_atomic`'s temporary file) or the
+    writer of a bag output (:class:`BagSink`)."""
+    if job.codec == "bag":
+        assert job.topic is not None
+        yield BagSink(job.output, job.topic, settings)
+        return
+    from ..imaging.videos import VIDEO_CODECS, VideoEncoder
+
+    with open_atomic(job.output, "wb", root=settings.root) as handle:
+        yield VideoEncoder(handle, VIDEO_CODECS[job.codec], source.time_base, source.rate)
+
+
+class BagSink:
+    """A bag output written by :func:`~gsrwt_cli.inputs.bags.write_bag` in a thread of its
+    own, frame by frame as :meth:`write` hands them over: into a temporary directory beside
+    the output (``.NAME.gsrwt-PID-XXXX.part``), renamed to the output's name by
+    :meth:`close` (an existing output, with ``--overwrite``, is moved aside first and then
+    removed), removed by :meth:`abandon`."""
+
+    _END, _ABORT = object(), object()
+
+    def __init__(self, output: Path, topic: str, settings: Settings) -> None:
+        from ..io.outputs import check_inside
+
+        if settings.root is not None:
+            check_inside(settings.root, output)
+        self.output, self.topic = output, topic
+        self.temporary = output.parent / (f".{output.name}.gsrwt-{os.getpid()}-"
+                                          f"{secrets.token_hex(4)}.part")
+        self.temporary.mkdir()
+        self.items: queue.Queue[Any] = queue.Queue(2)
+        self.frames = 0
+        self.failure: BaseException | None = None
+        self.thread = threading.Thread(target=self._write, daemon=True)
+        self.thread.start()
+
+    def _items(self) -> Iterator[tuple[int, np.ndarray, np.ndarray]]:
+        while True:
+            item = self.items.get()
+            if item is self._END:
+                return
+            if item is self._ABORT:
+                raise _NothingWrittenError
+            yield item
+
+    def _write(self) -> None:
+        from ..inputs.bags import write_bag
+
+        try:
+            write_bag(self.temporary / self.output.name, self.topic, self._items(), None)
+        except BaseException as error:  # reported by close
+            self.failure = error
+            while self.items.get() not in (self._END, self._ABORT):
+                pass
+
+    def write(self, pixels: np.ndarray, key: tuple[int | None, np.ndarray | None]) -> None:
+        """Queue one frame: ``key`` is its stamp (nanoseconds) and camera matrix."""
+        stamp, camera = key
+        if self.failure is not None:
+            raise self.failure
+        if stamp is None or camera is None:
+            raise ValueError("the frame has no stamp or camera")
+        self.items.put((int(stamp), pixels, camera))
+        self.frames += 1
+
+    def close(self) -> None:
+        """Finish the bag and put it under the output's name."""
+        self.items.put(self._END)
+        self.thread.join()
+        try:
+            if self.failure is not None:
+                raise self.failure
+            made = self.temporary / self.output.name
+            if os.path.lexists(self.output):  # --overwrite: the old one moved aside first
+                aside = self.output.parent / (f".{self.output.name}.gsrwt-{os.getpid()}-"
+                                              f"{secrets.token_hex(4)}.part")
+                os.rename(self.output, aside)
+                os.rename(made, self.output)
+                _remove_tree(aside)
+            else:
+                os.rename(made, self.output)
+        finally:
+            _remove_tree(self.temporary)
+
+    def abandon(self) -> None:
+        """Drop the bag being written."""
+        if self.thread.is_alive():
+            self.items.put(self._ABORT)
+            self.thread.join()
+        _remove_tree(self.temporary)
+
+
+def _remove_tree(path: Path) -> None:
+    if path.is_dir() and not path.is_symlink():
+        shutil.rmtree(path, ignore_errors=True)
+    else:
+        with contextlib.suppress(FileNotFoundError):
+            path.unlink()
 
 
 #: Frames waiting for the encoder's thread (each a warped frame in memory).
@@ -369,7 +488,7 @@ class _EncoderThread:
     def __init__(self, encoder: Any, refused: tuple[type[BaseException], ...]) -> None:
         self.encoder = encoder
         self.refused = refused
-        self.frames: queue.Queue[tuple[Row, np.ndarray, int] | None] = queue.Queue(
+        self.frames: queue.Queue[tuple[Row, np.ndarray, Any] | None] = queue.Queue(
             ENCODE_AHEAD)
         self.failure: BaseException | None = None
         self.drop = False
@@ -381,20 +500,20 @@ class _EncoderThread:
             item = self.frames.get()
             if item is None:
                 return
-            row, pixels, pts = item
+            row, pixels, key = item
             if self.drop or self.failure is not None:
                 continue
             try:
-                self.encoder.write(pixels, pts)
+                self.encoder.write(pixels, key)
             except self.refused as error:
                 row.update(status="error", error=error_text(error))
             except Exception as error:  # the file cannot be finished: reported by finish
                 self.failure = error
 
-    def put(self, row: Row, pixels: np.ndarray, pts: int) -> None:
+    def put(self, row: Row, pixels: np.ndarray, key: Any) -> None:
         if self.failure is not None:
             raise self.failure
-        self.frames.put((row, pixels, pts))
+        self.frames.put((row, pixels, key))
 
     def finish(self, drop: bool = False) -> None:
         """Wait for the frames queued (``drop``: throw them away) and end the thread;
@@ -406,8 +525,8 @@ class _EncoderThread:
             raise self.failure
 
 
-def _run(job: VideoJob, settings: Settings, processes: int, reader: VideoReader,
-         timeline: Timeline, deliver: Callable[[Row], None],
+def _run(job: StreamJob, settings: Settings, processes: int, source: FrameSource,
+         poses: FramePoses, deliver: Callable[[Row], None],
          on_progress: Callable[[], None] | None, previous: Sequence[Mapping[str, Any]],
          context: multiprocessing.context.BaseContext | None,
          decoding: _Decoding | None) -> None:
@@ -419,18 +538,19 @@ def _run(job: VideoJob, settings: Settings, processes: int, reader: VideoReader,
     jobs_out: dict[int, FrameJob] = {}
 
     def frame_jobs() -> Iterator[FrameJob]:
-        frames = reader.frames()
+        frames = source.frames()
         while True:
             try:
                 item = next(frames)
             except StopIteration:
                 return
-            except VideoError as error:
+            except SourceEndedError as error:
                 decoding.end_error = str(error)
                 return
             decoding.frames = item.index + 1
             decoding.pts[item.index] = item.pts
-            made = _frame_job(job, item, timeline, png, recorded, settings, image)
+            decoding.stamps[item.index] = item.stamp_ns
+            made = _frame_job(job, item, poses, png, recorded, settings, image)
             if job.steady and made.error is None and made.values is not None:
                 if decoding.steady_from is None:
                     decoding.steady_from = made.values
@@ -476,18 +596,19 @@ def _run(job: VideoJob, settings: Settings, processes: int, reader: VideoReader,
                  "status": "error", "error": decoding.end_error})
 
 
-def _frame_job(job: VideoJob, item: VideoFrame | FrameFailure, timeline: Timeline, png: bool,
+def _frame_job(job: StreamJob, item: StreamFrame, poses: FramePoses, png: bool,
                recorded: Mapping[str, Mapping[str, Any]], settings: Settings,
                image: str) -> FrameJob:
-    """The frame's job: its view values from the pose log, or the error it already has."""
+    """The frame's job: its view values from its poses, or the error it already has."""
     output = frame_file(job.output, item.index) if png else None
     shown = str(output) if output is not None else str(job.output)
-    base = FrameJob(image, item.index, item.time, None, None, "", output, shown)
-    if isinstance(item, FrameFailure):
-        return replace(base, error=item.reason)
-    moment = item.absolute if job.time_mode == "absolute" else item.time
+    pose_source = "bag" if isinstance(job.poses, TopicPoses) else "poses"
+    base = FrameJob(image, item.index, item.time, None, None, "", output, shown,
+                    camera=job.codec == "bag", pose_source=pose_source)
+    if item.pixels is None:
+        return replace(base, error=item.error or f"frame {item.index} has no image")
     try:
-        values, where, source = _frame_values(job, timeline, moment, item.index)
+        values, where, focal_source = poses.values_at(item)
     except JobError as error:
         return replace(base, error=str(error))
     existed = output is not None and os.path.lexists(output)
@@ -501,14 +622,40 @@ def _frame_job(job: VideoJob, item: VideoFrame | FrameFailure, timeline: Timelin
                            error="its output exists from a run with other options (the "
                                  "previous table's made_with differs); use --overwrite to "
                                  "redo it")
-    return FrameJob(image, item.index, item.time, None if record else item.pixels, values,
-                    where, output, shown, source, None, existed, record)
+    return replace(base, pixels=None if record else item.pixels, values=values, where=where,
+                   focal_source=focal_source, existed=existed, record=record)
 
 
-def remove_video_temporaries(job: VideoJob) -> None:
-    """Remove what a killed run left half-written for this video (its temporary file, or
-    those of its image sequence's frames)."""
+def remove_video_temporaries(job: StreamJob) -> None:
+    """Remove what a killed run left half-written for this stream (its temporary file or
+    bag directory, or those of its image sequence's frames)."""
     with contextlib.suppress(OSError):
         remove_stale_temporaries(job.output.parent, names={job.output.name})
+        if job.codec == "bag":
+            _remove_stale_directories(job.output.parent, job.output.name)
         if job.codec == "png" and job.output.is_dir():
             remove_stale_temporaries(job.output)
+
+
+def _remove_stale_directories(directory: Path, name: str) -> None:
+    """Temporary directories of ours for ``name`` (a bag being written) whose process is
+    gone."""
+    for entry in os.scandir(directory):
+        match = TEMPORARY_PATTERN.match(entry.name)
+        if match is None or temporary_target(entry.name) != name:
+            continue
+        if not entry.is_dir(follow_symlinks=False) or _alive(int(match.group(1))):
+            continue
+        shutil.rmtree(entry.path, ignore_errors=True)
+
+
+def _alive(pid: int) -> bool:
+    if pid == os.getpid():
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True

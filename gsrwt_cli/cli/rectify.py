@@ -77,6 +77,7 @@ from ..io.storage import Location, location
 from ..io.targets import file_identity, protected_files
 from ..tables.shards import parse_shard, shard_slice, shard_table_name
 from ..tables.writer import format_from_extension, read_table
+from .bags import BagOptions, is_bag_input
 from .batch_run import (  # noqa: F401  (named here too: estimate and the tests take them)
     TableWriteError,
     Terminated,
@@ -494,20 +495,46 @@ def dask_executor(address: str, processes: int, retries: int,
 @click.option("--time", "time_mode", type=click.Choice(VIDEO_TIME_MODES), default="relative",
               show_default=True,
               help="With --poses: the time column counts seconds from the first frame, or "
-                   "is on the video's own clock (absolute: pts x time_base).")
+                   "is on the input's own clock (absolute: a video's pts x time_base, a "
+                   "bag's header stamps in seconds).")
 @click.option("--max-pose-gap", type=Number(min=0), default=DEFAULT_MAX_POSE_GAP,
               show_default=True,
-              help="With --poses: a frame further than this many seconds from every pose "
-                   "is an error row.")
+              help="With --poses or --pose-topic: a frame further than this many seconds "
+                   "from every pose is an error row.")
 @click.option("--steady", is_flag=True,
-              help="With --poses: frame every frame on the wall the first frame's default "
+              help="A video's or bag's: frame every frame on the wall the first frame's default "
                    "frame shows, so that the wall stands still in the output (one focal "
                    "length), instead of each frame's own default frame.")
 @click.option("--codec", type=click.Choice(VIDEO_CODEC_CHOICES), default="h264",
               show_default=True,
-              help="With --poses: the output, OUTDIR/NAME.mp4 (h264), OUTDIR/NAME.mkv "
-                   "(ffv1, lossless) or OUTDIR/NAME/000000.png... (png); the input's "
-                   "timestamps kept. The table is OUTDIR/NAME.csv, a row per frame.")
+              help="A video's or bag's output: OUTDIR/NAME.mp4 (h264), OUTDIR/NAME.mkv "
+                   "(ffv1, lossless), OUTDIR/NAME/000000.png... (png) or, for a bag, a bag "
+                   "(OUTDIR/NAME.bag from ROS 1, else the ROS 2 MCAP bag OUTDIR/NAME) with "
+                   "the topic NS/gsrwt/image and its camera_info; the input's timestamps "
+                   "kept. The table is OUTDIR/NAME.csv, a row per frame.")
+@click.option("--topic", default=None, metavar="TOPIC",
+              help="INPUT is a ROS bag (.bag, .mcap, .db3 or a ROS 2 bag directory; needs "
+                   "pip install 'gsrwt[ros]'): its image topic (sensor_msgs/Image or "
+                   "CompressedImage), e.g. /camera/image_raw.")
+@click.option("--pose-topic", default=None, metavar="TOPIC",
+              help="A bag's poses: a PoseStamped, QuaternionStamped, Imu, JointState (with "
+                   "--joints) or tf (with --wall-frame and --camera-frame) topic, "
+                   "interpolated to each frame's stamp (slerp). Or --poses FILE.")
+@click.option("--joints", default=None, metavar="PAN,TILT",
+              help="With a JointState --pose-topic: the names of the pan and tilt joints "
+                   "(radians; pan left and tilt up positive).")
+@click.option("--joint-signs", default=None, metavar="S,S",
+              help="With --joints: 1 or -1 for each joint, flipping a unit whose signs "
+                   "differ [default: 1,1].")
+@click.option("--wall-frame", default=None, metavar="FRAME",
+              help="With a tf --pose-topic: the wall's frame (x right, y down, z into the "
+                   "wall); with PoseStamped or QuaternionStamped, the header frame required.")
+@click.option("--camera-frame", default=None, metavar="FRAME",
+              help="With a tf --pose-topic: the camera's optical frame (x right, y down, z "
+                   "forward).")
+@click.option("--camera-info-topic", default=None, metavar="TOPIC",
+              help="A bag's camera [default: camera_info in --topic's namespace]; --camera "
+                   "replaces it, --focal, --cx, --cy override its values.")
 def rectify(inputs: tuple[str, ...], outdir: Path | Location, recursive: bool,
             sidecar: Path | Location | None, **options: Any) -> None:
     """Rectify images into canonical frontal views of the wall they show (GS-RWT).
@@ -529,6 +556,20 @@ def rectify(inputs: tuple[str, ...], outdir: Path | Location, recursive: bool,
     poses, time_mode = options.pop("poses"), options.pop("time_mode")
     max_pose_gap, codec = options.pop("max_pose_gap"), options.pop("codec")
     steady = options.pop("steady")
+    bag_options = BagOptions.pop_from(options)
+    if bag_options.given() or any(is_bag_input(text) for text in inputs):
+        from .bags import rectify_bag  # bags only when given
+
+        _check_stream_options(inputs, sidecar, recursive, run, options, steady)
+        settings, _ = settings_from_options(outdir, options)
+        table_path = options.pop("table_path")
+        table = table_from_options(outdir, table_path, None)
+        for name in ("auto", "min_confidence", "wall", "shard"):
+            options.pop(name)
+        rectify_bag(inputs, outdir, bag_options, poses, time_mode, max_pose_gap, codec,
+                    settings, table, table_path is not None, run, view_defaults(options),
+                    steady)
+        return
     if poses is not None or any(is_video_name(text) for text in inputs if text != "-"):
         from .videos import check_video_request, rectify_video  # videos only when given
 
@@ -549,6 +590,9 @@ def rectify(inputs: tuple[str, ...], outdir: Path | Location, recursive: bool,
         return
     if steady:
         raise click.UsageError("--steady applies to a video (with --poses) only")
+    if codec == "bag":
+        raise click.UsageError("--codec bag writes a bag's rectified topic: INPUT must be a "
+                               "bag, with --topic")
     settings, extension = settings_from_options(outdir, options)
     table = table_from_options(outdir, options.pop("table_path"), options.pop("shard"))
     auto = options.pop("auto")
@@ -566,6 +610,24 @@ def rectify(inputs: tuple[str, ...], outdir: Path | Location, recursive: bool,
         summary += f", {counts.interrupted} not done"
     end_batch(summary, "" if table.path == "-" else f"; table: {table.path}", stopped,
               counts.failed, run.quiet)
+
+
+def _check_stream_options(inputs: tuple[str, ...], sidecar: Any, recursive: bool,
+                          run: RunOptions, options: dict[str, Any], steady: bool) -> None:
+    """Usage errors of options a bag does not take (as for a video)."""
+    if options["auto"] is not None:
+        raise click.UsageError(f"{inputs[0]}: --auto does not estimate a bag's poses; give "
+                               "them with --pose-topic TOPIC or --poses FILE")
+    for name, given in {"--sidecar": sidecar is not None, "-r": recursive,
+                        "--scheduler": bool(run.scheduler),
+                        "--shard": options["shard"] is not None,
+                        "--ext": options["ext"] is not None,
+                        "--dry-run": options["dry_run"]}.items():
+        if given:
+            raise click.UsageError(f"{name} does not apply to a bag (INPUT {inputs[0]})")
+    if steady and options["bbox"] != "frontal":
+        raise click.UsageError("--steady keeps the first frame's default frame: it "
+                               "needs --bbox frontal")
 
 
 @dataclass(frozen=True)

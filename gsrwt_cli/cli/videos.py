@@ -1,9 +1,10 @@
 """``gsrwt rectify VIDEO --poses FILE``: a video rectified frame by frame, with a table row
-per frame.
+per frame; and the run of any stream (a video, a bag: :mod:`.bags`).
 
 The options are :mod:`.rectify`'s; this module checks what a video run needs (one video,
 a pose file, a codec this FFmpeg encodes, options that make sense for a stream), and runs
-it with the same table, signals and last line as a directory batch.
+it, or a bag's, with the same table, signals and last line as a directory batch
+(:func:`run_stream_command`).
 """
 
 from __future__ import annotations
@@ -13,6 +14,7 @@ import math
 import os
 import sys
 from dataclasses import replace
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -20,9 +22,10 @@ import click
 from tqdm import tqdm
 
 from ..base.messages import one_line, quote
+from ..batch.frame_sources import LogPoses, VideoSource
 from ..batch.rectify_jobs import Counts, Settings, worker_context
 from ..batch.reruns import made_with
-from ..batch.video_jobs import VideoJob, output_of, remove_video_temporaries, run_video
+from ..batch.video_jobs import StreamJob, output_of, remove_video_temporaries, run_stream
 from ..inputs.pose_log import PoseLog, load_pose_log
 from ..inputs.sidecar import SidecarError
 from ..inputs.videos import VIDEO_EXTENSIONS, VideoError, import_av, is_video_name
@@ -96,8 +99,10 @@ def rectify_video(inputs: tuple[str, ...], outdir: Path | Location, poses: str,
     """Check, run and end a video run (the command's exit status and last line)."""
     if isinstance(outdir, Location):
         raise InputError(f"-o {outdir}: videos are written to a local directory only")
-    if not (math.isfinite(max_gap) and max_gap >= 0):
-        raise click.BadParameter("must be a number of seconds >= 0", param_hint="'--max-pose-gap'")
+    if codec == "bag":
+        raise click.BadParameter("bag writes a ROS bag's rectified topic: it needs a bag as "
+                                 f"INPUT, not the video {inputs[0]}", param_hint="'--codec'")
+    check_max_pose_gap(max_gap)
     source = Path(inputs[0])
     if not source.is_file():
         raise InputError(f"{inputs[0]}: no such file" if not source.exists()
@@ -106,39 +111,87 @@ def rectify_video(inputs: tuple[str, ...], outdir: Path | Location, poses: str,
         import_av()
     except VideoError as error:
         raise InputError(f"{inputs[0]}: {error}") from None
-    if codec != "png":
-        from ..imaging.videos import VIDEO_CODECS, codec_available
-
-        if not codec_available(VIDEO_CODECS[codec]):
-            raise click.BadParameter(f"this PyAV's FFmpeg has no {VIDEO_CODECS[codec].encoder} "
-                                     "encoder; use --codec ffv1 or png", param_hint="'--codec'")
-        if settings.alpha:
-            raise click.UsageError(f"--alpha needs --codec png ({codec} has no alpha channel)")
-    try:
-        log: PoseLog = load_pose_log(poses)
-        log.timeline(max_gap)  # two samples at the same time: refused before any work
-    except SidecarError as error:
-        raise InputError(f"--poses {one_line(str(error), 400)}") from None
-    fallback = {name: value for name, value in view_kwargs.items()
-                if value is not None and not isinstance(value, bool)}
+    check_codec(codec, settings)
+    log = read_pose_log(poses, max_gap)
+    fallback = view_fallback(view_kwargs)
     _check_first_view(log, fallback, poses)
     output = output_of(source, outdir, codec)
+    words = stream_words(fallback, settings, codec, output) + (
+        f" poses=sha256:{log.digest} time={time_mode} max_pose_gap={max_gap:g} "
+        f"codec={codec}" + (" steady=on" if steady else ""))
+    job = StreamJob(source, output, codec, LogPoses(log, time_mode, max_gap, fallback, {}),
+                    partial(VideoSource, source, settings.max_input_pixels), words.strip(),
+                    steady)
+    run_stream_command(job, outdir, settings, table, table_given, run,
+                       {file_identity(source), file_identity(Path(poses))})
+
+
+def check_max_pose_gap(max_gap: float) -> None:
+    if not (math.isfinite(max_gap) and max_gap >= 0):
+        raise click.BadParameter("must be a number of seconds >= 0", param_hint="'--max-pose-gap'")
+
+
+def check_codec(codec: str, settings: Settings) -> None:
+    """A usage error for a video codec this PyAV's FFmpeg lacks (needs PyAV), or for
+    ``--alpha`` with a codec without alpha."""
+    if codec in ("png", "bag"):
+        return
+    try:
+        import_av()
+    except VideoError as error:
+        raise click.BadParameter(f"{codec} needs PyAV: {error}", param_hint="'--codec'"
+                                 ) from None
+    from ..imaging.videos import VIDEO_CODECS, codec_available
+
+    if not codec_available(VIDEO_CODECS[codec]):
+        raise click.BadParameter(f"this PyAV's FFmpeg has no {VIDEO_CODECS[codec].encoder} "
+                                 "encoder; use --codec ffv1 or png", param_hint="'--codec'")
+    if settings.alpha:
+        raise click.UsageError(f"--alpha needs --codec png ({codec} has no alpha channel)")
+
+
+def read_pose_log(poses: str, max_gap: float) -> PoseLog:
+    """``--poses FILE`` read, two samples at the same time refused before any work."""
+    try:
+        log: PoseLog = load_pose_log(poses)
+        log.timeline(max_gap)
+    except SidecarError as error:
+        raise InputError(f"--poses {one_line(str(error), 400)}") from None
+    return log
+
+
+def view_fallback(view_kwargs: dict[str, Any]) -> dict[str, Any]:
+    """The view options given, as every frame's fallback values."""
+    return {name: value for name, value in view_kwargs.items()
+            if value is not None and not isinstance(value, bool)}
+
+
+def stream_words(fallback: dict[str, Any], settings: Settings, codec: str,
+                 output: Path) -> str:
+    """The start of a stream's ``made_with``: its view options and settings."""
+    return made_with(dict(fallback), None, settings, ".png" if codec in ("png", "bag") else
+                     output.suffix) or ""
+
+
+def run_stream_command(job: StreamJob, outdir: Path | Location, settings: Settings,
+                       table: Any, table_given: bool, run: Any, given: set[str]) -> None:
+    """Run a checked stream (a video, a bag) with its table, and end the command: what
+    ``given`` (the inputs' identities) names is never overwritten."""
+    assert isinstance(outdir, Path)
+    source, output = job.source, job.output
     if not table_given:
-        default = str(outdir / f"{source.stem}.csv")
+        default = str(outdir / f"{source.stem if source.suffix else source.name}.csv")
         table = replace(table, path=default, format="csv", default=default)
-    given = {file_identity(source), file_identity(Path(poses))}
     for target, what in ((output, f"-o {outdir}: output {output}"),
                          (Path(table.path), f"--table {table.path}")):
         if table.path != "-" and file_identity(target) in given:
             raise InputError(f"{what} would overwrite an input; choose another")
+    if job.codec == "bag" and os.path.lexists(output) and output.is_dir() == (
+            output.suffix == ".bag"):
+        raise InputError(f"-o {outdir}: {output} exists and is not a "
+                         f"{'file' if output.suffix == '.bag' else 'directory'} (a bag)")
     prepare_directory(outdir, f"-o {outdir}")
     prepare_table(table.path, "--table")
-    words = made_with(dict(fallback), None, settings, ".png" if codec == "png" else
-                      output.suffix) or ""
-    words += (f" poses=sha256:{log.digest} time={time_mode} max_pose_gap={max_gap:g} "
-              f"codec={codec}" + (" steady=on" if steady else ""))
-    job = VideoJob(source, output, codec, log, time_mode, max_gap, fallback, words.strip(),
-                   steady)
     remove_video_temporaries(job)
     if table.path != "-":  # the table of a killed run
         remove_stale_temporaries(Path(table.path).parent, names={Path(table.path).name})
@@ -157,7 +210,7 @@ def rectify_video(inputs: tuple[str, ...], outdir: Path | Location, poses: str,
     end_batch(f"{summary}; output: {output}", where, stopped, counts.failed, run.quiet)
 
 
-def _run(job: VideoJob, settings: Settings, table: Any, run: Any,
+def _run(job: StreamJob, settings: Settings, table: Any, run: Any,
          previous: list[dict[str, Any]]) -> tuple[Counts, BaseException | None]:
     tqdm.monitor_interval = 0
     progress = tqdm(unit="frame", file=sys.stderr, dynamic_ncols=True,
@@ -174,9 +227,9 @@ def _run(job: VideoJob, settings: Settings, table: Any, run: Any,
                 table.path, VIDEO_COLUMNS, table.format, counts,
                 lambda line: progress.write(line, file=sys.stderr), place) as on_row:
             try:
-                run_video(job, settings, run.jobs, on_row, on_progress=lambda: progress.update(1),
-                          previous=previous, context=worker_context(False),
-                          max_input_pixels=settings.max_input_pixels)
+                run_stream(job, settings, run.jobs, on_row,
+                           on_progress=lambda: progress.update(1), previous=previous,
+                           context=worker_context(False))
             except (KeyboardInterrupt, Terminated) as stop:
                 stopped = stop
     finally:

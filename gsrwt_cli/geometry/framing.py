@@ -17,7 +17,7 @@ from .camera import View
 from .gsrwt import Matrix, local_stretch, map_points
 from .lens import LensDistortion
 from .pixelmap import PixelMap
-from .rotations import rotation_from_pose
+from .rotations import opencv_from_world_from_camera, rotation_from_pose
 
 
 def canonical_from_pixel(view: View) -> Matrix:
@@ -444,6 +444,28 @@ class Plan:
         """``output (col, row, 1) ~ homography @ input (col, row, 1)``."""
         return self.pixel_map.output_from_input
 
+    def output_camera(self) -> tuple[Matrix, Matrix]:
+        """The camera that would see the output as a photo: ``(K, camera_from_wall)``.
+
+        Convention: ``K`` upper triangular with a positive diagonal and ``K[2, 2] = 1``
+        (OpenCV's camera matrix, output pixels); ``camera_from_wall`` the rotation from the
+        OpenCV wall frame (x right, y down, z into the wall) to that camera's optical frame,
+        the identity for a frontal view. The output pixel of a wall direction ``d`` is
+        ``K @ camera_from_wall @ d``, since ``output ~ H @ K_in @ R_in @ d`` (``H`` the
+        homography on ideal input pixels, ``R_in`` the input's ``camera_from_wall``): the RQ
+        decomposition of ``H @ K_in @ R_in``. A bag output's ``camera_info`` is ``K``.
+        """
+        view = self.view
+        pose = view.pose
+        camera_from_wall = opencv_from_world_from_camera(
+            rotation_from_pose(pose.pan, pose.tilt, pose.roll))
+        m = np.asarray(self.homography, dtype=np.float64) @ view.intrinsics.matrix() @ (
+            camera_from_wall)
+        if np.linalg.det(m) < 0:  # a homography's scale may be negative
+            m = -m
+        k, r = _rq(m)
+        return k / k[2, 2], r
+
 
 @dataclass(frozen=True)
 class Framing:
@@ -599,3 +621,14 @@ def render_map(view: View, texture_size: tuple[int, int]) -> PixelMap:
     camera_from_texture = np.linalg.inv(texture_from_camera(view, texture_size))
     return PixelMap(camera_from_texture, (view.width, view.height),
                     output_lens=view.intrinsics.distortion())
+
+
+def _rq(m: Matrix) -> tuple[Matrix, Matrix]:
+    """``m = K @ R``: ``K`` upper triangular with a positive diagonal, ``R`` a rotation (for
+    ``det(m) > 0``), by the QR decomposition of the flipped matrix."""
+    flip = np.eye(3)[::-1]
+    q, upper = np.linalg.qr((flip @ m).T)
+    k = flip @ upper.T @ flip
+    r = flip @ q.T
+    signs = np.diag(np.sign(np.diag(k)))
+    return k @ signs, signs @ r

@@ -12,6 +12,7 @@ install), imported on first use: without it every function raises :class:`BagErr
 - :func:`pose_samples`: timestamped rotations (``world_from_camera``, thesis frames) from
   ``PoseStamped``, ``QuaternionStamped``, ``Imu``, ``JointState`` or ``/tf`` + ``/tf_static``.
 - :func:`write_bag`: a bag with an image topic and its ``camera_info``, written whole.
+- :func:`bag_topics`, :func:`is_bag_name`: a bag's topics, and which inputs are bags.
 
 Time
 ----
@@ -313,6 +314,25 @@ def camera_info_topic_of(image_topic: str) -> str:
     if len(parts) > 2 and parts[-1] in _TRANSPORTS:
         parts = parts[:-1]
     return "/".join(parts[:-1] + ["camera_info"]) or "/camera_info"
+
+
+def bag_topics(bag: str | Path) -> dict[str, str]:
+    """Every topic of ``bag`` and its message type (the first, for a topic with several),
+    sorted by name; :class:`BagError` when the bag cannot be read."""
+    with _open(bag) as reader:
+        topics: dict[str, str] = {}
+        for connection in reader.connections:
+            topics.setdefault(connection.topic, connection.msgtype)
+    return dict(sorted(topics.items()))
+
+
+def is_bag_name(path: str | Path) -> bool:
+    """Whether ``path`` names a bag: a ``.bag``, ``.mcap`` or ``.db3`` file, or a directory
+    holding a ROS 2 bag's ``metadata.yaml``."""
+    path = Path(path)
+    if path.suffix.lower() in (".bag", ".mcap", ".db3"):
+        return True
+    return path.is_dir() and (path / "metadata.yaml").is_file()
 
 
 # --------------------------------------------------------------------------------------------

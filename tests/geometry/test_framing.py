@@ -248,3 +248,27 @@ def test_steady_box_puts_a_wall_point_where_the_first_view_put_it():
             expected = landed
         np.testing.assert_allclose(landed, expected, atol=1e-6)
         assert plan.size == (320, 240)
+
+
+@pytest.mark.parametrize(("pan", "tilt", "roll", "scale"),
+                         [(20, 10, 0, 1.0), (-35, 25, 4, 1.0), (15, -30, -7, 0.5), (0, 0, 0, 2)])
+def test_the_output_camera_sees_the_wall_where_the_output_shows_it(pan, tilt, roll, scale):
+    """``Plan.output_camera()``: the camera of a bag output's camera_info. Wall points seen by
+    the words-built camera land, through the plan's pixel map, where a camera with that K,
+    square to the wall (its rotation the identity), sees them."""
+    focal, width, height = 500.0, 640, 480
+    view = View(pan=pan, tilt=tilt, roll=roll, focal=focal)
+    plan = plan_output(view.with_size(width, height), Framing(scale=scale))
+    k, camera_from_wall = plan.output_camera()
+    np.testing.assert_allclose(camera_from_wall, np.eye(3), atol=1e-9)
+    assert k[0, 0] == pytest.approx(focal * scale) and k[1, 1] == pytest.approx(focal * scale)
+    assert k[0, 1] == pytest.approx(0, abs=1e-9) and k[2, 2] == 1
+    grid = np.stack(np.meshgrid(np.linspace(-1, 1, 5), np.linspace(-1, 1, 5)), -1).reshape(-1, 2)
+    axis = 10 * camera_axes(pan, tilt, roll)[2]
+    wall = grid + axis[:2] / axis[2] * 10  # around where the optical axis meets the wall
+    seen, _ = project_wall_points(wall, 10.0, pan, tilt, focal, (width - 1) / 2,
+                                  (height - 1) / 2, roll)
+    shown = plan.pixel_map.to_output(seen)
+    directions = np.column_stack([wall[:, 1], -wall[:, 0], np.full(len(wall), 10.0)])
+    expected = directions @ k.T
+    np.testing.assert_allclose(shown, expected[:, :2] / expected[:, 2:], atol=1e-6)
