@@ -115,8 +115,8 @@ def estimate(inputs: tuple[str, ...], output: str | None, fmt: str | None, recur
     height (what 'gsrwt rectify --sidecar' reads), then confidence, segments, inliers,
     focal_source, aspect and aspect_source, the three vanishing points in pixels, status and
     error. Images that cannot tell their pose get status error and no pose. With guides
-    (--corners, --verticals, --horizontals) the pose is the one they show. Exit code 1 if
-    any failed.
+    (--corners, --verticals, --horizontals) the pose is the one they show. A video as the
+    only INPUT gives a row per frame (frame, time in front). Exit code 1 if any failed.
 
     \b
     Examples:
@@ -134,6 +134,17 @@ def estimate(inputs: tuple[str, ...], output: str | None, fmt: str | None, recur
                                      ".md or .yaml, or give --format", param_hint="'-o'")
     else:
         table_format, output = resolve_format(fmt), "-"
+    from .sequences import video_input
+
+    video = video_input(inputs)
+    if video is not None:
+        from .sequences import estimate_video
+
+        check_lens_profile(lens_profile)
+        estimate_video(video, output, table_format, EstimateOptions(
+            min_confidence, wall, input_pixel_limit, exif_orientation, auto, lens_profile),
+            view_defaults(camera), quiet)
+        return
     if str(sidecar) == "-" and "-" in inputs:
         raise InputError("--sidecar - and INPUT - cannot both read standard input")
     loaded = load_sidecar_option(sidecar)

@@ -328,3 +328,52 @@ def track_work(run: VideoRun, search: TemplateSearch) -> FrameWork:
                    wall_y=gaze.wall_y, status="ok")
         return [row]
     return work
+
+
+# --------------------------------------------------------------------------------------------
+# The commands' video runs (the commands call these when INPUT is a video)
+# --------------------------------------------------------------------------------------------
+
+#: ``estimate``'s options that a video does not take: its parameter's name and its flag.
+ESTIMATE_REFUSED = {"sidecar": "--sidecar", "recursive": "-r", "draw": "--draw",
+                    "corners": "--corners", "aspect": "--aspect", "verticals": "--verticals",
+                    "horizontals": "--horizontals", "fit": "--fit",
+                    "exif_orientation": "--orientation", "lens_profile": "--lens-profile"}
+
+
+def estimate_video(video: str, output: str, table_format: str, options: Any,
+                   fallback: Mapping[str, Any], quiet: bool) -> None:
+    """``gsrwt estimate VIDEO``: every frame's pose from its lines, as sidecar rows with the
+    frame and time in front (``options``: :class:`~gsrwt_cli.batch.estimate_jobs.
+    EstimateOptions`), into ``output`` (``-``: stdout) as ``table_format``."""
+    from ..inputs.sidecar import display_path
+    from ..io.storage import location
+    from ..io.targets import file_identity
+    from ..tables.columns import ESTIMATE_SEQUENCE_COLUMNS
+    from ..tables.writer import TableWriter, YamlRecordWriter
+    from .batch_run import end_batch, open_table
+    from .options import prepare_table
+
+    ctx = click.get_current_context()
+    refuse_for_video(video, given_options(ctx, ESTIMATE_REFUSED))
+    if options.mode != "lines":
+        raise click.UsageError(f"--auto {options.mode} does not apply to a video (INPUT {video})")
+    run = open_video_run(video, None, "relative", 0.0, fallback)
+    if output != "-" and file_identity(location(output)) == file_identity(Path(video)):
+        raise InputError(f"-o {output}: would overwrite an input; choose another path")
+    prepare_table(output, "-o")
+    counts = {"ok": 0, "failed": 0}
+    with open_table(output) as stream:
+        writer: TableWriter | YamlRecordWriter = (
+            YamlRecordWriter(stream, ESTIMATE_SEQUENCE_COLUMNS) if table_format == "yaml"
+            else TableWriter(stream, ESTIMATE_SEQUENCE_COLUMNS, table_format))
+
+        def write(row: Row) -> None:
+            counts["ok" if row.get("status") == "ok" else "failed"] += 1
+            writer.write_row(row)
+
+        write_frame_rows(frame_rows(run, estimate_work(run, options)), write)
+        writer.close()
+    end_batch(f"{counts['ok']} frames estimated, {counts['failed']} failed",
+              "" if output == "-" else f"; table: {display_path(output)}", None,
+              counts["failed"], quiet)
