@@ -138,9 +138,8 @@ def track(video: str | None, distance: float | None, height: float | None,
     gsrwt gaze --to-pixel computes it); status lost when it is not found.
 
     \b
-    Examples:
+    Example:
       gsrwt track --distance 25 --height 9.5 --object 33 --positions 0,12,18
-      gsrwt track walk.mkv --poses poses.csv --focal 300 --template knob.png
     """
     ctx = click.get_current_context()
     if video is not None:

@@ -11,7 +11,7 @@ import cv2
 import numpy as np
 import pytest
 
-from tests.helpers.camera import project_wall_points, render_view
+from tests.helpers.camera import camera_axes, project_wall_points, render_view
 from tests.helpers.cli import run_gsrwt
 from tests.helpers.estimate_scenes import render_room
 from tests.helpers.images import smooth_texture
@@ -120,8 +120,9 @@ def _knob_texture() -> tuple[np.ndarray, tuple[float, float]]:
 def test_track_follows_a_landmark_and_its_gaze_commands_centre_it(tmp_path: Path) -> None:
     """A knob on the wall, seen from a pan-tilt sweep: each frame's match is where the
     independent camera projects the knob (within 1 px; 0.3 px measured), and the command
-    (pan_deg, tilt_deg) turns that camera so that the knob lands within 1 px of its
-    principal point (0.2 degree at f = 300 px; 0.3 px measured)."""
+    (pan_deg, tilt_deg) turns that camera's optical axis within 0.2 degree of the true
+    direction to the knob, so that it lands within 1 px of the principal point (0.3 px
+    measured)."""
     texture, (col, row) = _knob_texture()
     unit = DISTANCE / FOCAL
     th, tw = texture.shape[:2]
@@ -149,12 +150,15 @@ def test_track_follows_a_landmark_and_its_gaze_commands_centre_it(tmp_path: Path
     assert [int(r["frame"]) for r in rows] == list(range(COUNT))
     found = np.array([[float(r["x_src"]), float(r["y_src"])] for r in rows])
     assert np.ptp(found[:, 0]) > 40  # the knob moves across the frames
-    for r, seen, (pan, tilt, roll) in zip(rows, truth, poses, strict=True):
+    towards = np.array([*wall[0], DISTANCE]) / np.linalg.norm([*wall[0], DISTANCE])
+    for r, seen in zip(rows, truth, strict=True):
         assert r["status"] == "ok" and float(r["score"]) >= 0.6
         assert np.hypot(*(np.array([float(r["x_src"]), float(r["y_src"])]) - seen)) < 1
-        centred = project_wall_points(wall, DISTANCE, float(r["pan_deg"]), float(r["tilt_deg"]),
-                                      FOCAL, cx, cy)[0][0]
+        pan, tilt = float(r["pan_deg"]), float(r["tilt_deg"])
+        centred = project_wall_points(wall, DISTANCE, pan, tilt, FOCAL, cx, cy)[0][0]
         assert np.hypot(centred[0] - cx, centred[1] - cy) < 1
+        forward = camera_axes(pan, tilt)[2]  # the optical axis the command gives
+        assert np.degrees(np.arccos(min(1.0, forward @ towards))) < 0.2
     match = run_gsrwt("match", video, "--poses", log, "--focal", str(FOCAL), "--template",
                       KNOB, "-f", "csv")
     assert match.returncode == 0, match.stderr
