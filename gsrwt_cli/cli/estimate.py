@@ -143,7 +143,7 @@ def estimate(inputs: tuple[str, ...], output: str | None, fmt: str | None, recur
         check_lens_profile(lens_profile)
         estimate_video(video, output, table_format, EstimateOptions(
             min_confidence, wall, input_pixel_limit, exif_orientation, auto, lens_profile),
-            view_defaults(camera), quiet)
+            view_defaults(camera), quiet, jobs)
         return
     if str(sidecar) == "-" and "-" in inputs:
         raise InputError("--sidecar - and INPUT - cannot both read standard input")

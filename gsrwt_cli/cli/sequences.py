@@ -12,6 +12,7 @@ go on; the exit status is 1 if any frame failed.
 from __future__ import annotations
 
 import math
+import os
 import sys
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -23,15 +24,13 @@ import numpy as np
 
 from ..base.messages import quote
 from ..batch.frame_sequences import SequenceFrame, frame_canonical_view, sequence_frames
-from ..batch.job_errors import error_text
+from ..batch.sequence_workers import FrameWork, rows_in_order
 from ..inputs.pose_log import PoseLog, load_pose_log
 from ..inputs.sidecar import SidecarError
 from ..inputs.videos import VIDEO_EXTENSIONS, VideoError, import_av, is_video_name
 from .options import InputError, report_error
 
 Row = dict[str, Any]
-#: The work of one frame: its rows (without ``frame``, ``time``), each with its ``status``.
-FrameWork = Callable[[SequenceFrame], list[Row]]
 
 
 def video_input(inputs: Iterable[object]) -> str | None:
@@ -117,36 +116,24 @@ def open_video_run(video: str, poses: str | None, time_mode: str, max_gap: float
     return VideoRun(video, log, time_mode, max_gap, values)
 
 
-def frame_rows(run: VideoRun, work: FrameWork) -> Iterator[Row]:
+def frame_rows(run: VideoRun, work: FrameWork, processes: int = 1,
+               context: Any = None) -> Iterator[Row]:
     """Every frame's rows, in frame order, with ``frame`` and ``time`` in front and the
     video as ``image``; a frame that failed (decoding, its pose, its work) is one ``error``
-    row, reported on stderr. A file that is no video is one error row without a frame."""
-    frames = run.frames()
-    while True:
-        try:
-            frame = next(frames)
-        except StopIteration:
-            return
-        except VideoError as error:
-            report_error(f"{run.video}: {error}")
-            yield {"image": run.video, "status": "error", "error": str(error)}
-            return
-        head: Row = {"frame": frame.index, "time": frame.time, "image": run.video}
-        error = frame.error
-        rows: list[Row] = []
-        if error is None:
-            try:
-                with np.errstate(all="ignore"):
-                    rows = work(frame)
-            except Exception as failure:  # every failure of one frame is that frame's row
-                error = error_text(failure)
-        if error is not None:
-            rows = [{"status": "error", "error": error}]
-        for row in rows:
-            if row.get("status") == "error":
-                place = f"{run.video} frame {frame.index}" if not frame.end else run.video
-                report_error(f"{place}: {row.get('error')}")
-            yield {**head, **row}
+    row, reported on stderr. A file that is no video is one error row without a frame.
+    ``processes`` > 1: the work is done by that many worker processes (``context``: how
+    they start), the frames still decoded here."""
+    try:
+        for frame, rows in rows_in_order(run.frames(), work, processes, context):
+            head: Row = {"frame": frame.index, "time": frame.time, "image": run.video}
+            for row in rows:
+                if row.get("status") == "error":
+                    place = run.video if frame.end else f"{run.video} frame {frame.index}"
+                    report_error(f"{place}: {row.get('error')}")
+                yield {**head, **row}
+    except VideoError as error:
+        report_error(f"{run.video}: {error}")
+        yield {"image": run.video, "status": "error", "error": str(error)}
 
 
 def write_frame_rows(rows: Iterator[Row], write: Callable[[Row], None]) -> int:
@@ -189,38 +176,12 @@ def params_work(run: VideoRun) -> FrameWork:
 def estimate_work(run: VideoRun, options: Any) -> FrameWork:
     """``estimate``: the frame's pose from its lines, as a sidecar row with its evidence
     (``options``: :class:`~gsrwt_cli.batch.estimate_jobs.EstimateOptions`); the camera is the
-    options' (``--focal``, ``--camera``...), or its focal length is estimated."""
-    from ..api.estimate import EstimateError, estimate_pose
-    from ..batch.estimate_jobs import checked, estimate_row, estimated_values
-    from ..inputs.records import view_from_values
+    options' (``--focal``, ``--camera``...), or its focal length is estimated. Picklable, for
+    ``-j``'s workers."""
+    from ..batch.sequence_workers import EstimateFrames
 
-    own = {name: value for name, value in run.fallback.items()
-           if name not in ("pan", "tilt", "roll")}
-    has_focal = any(own.get(name) not in (None, "") for name in ("focal", "fx"))
-    source = "option" if has_focal else "camera" if own.get("camera") else "estimated"
-
-    def work(frame: SequenceFrame) -> list[Row]:
-        assert frame.pixels is not None
-        height, width = frame.pixels.shape[:2]
-        values = {**own, "pan": 0, "tilt": 0}
-        if values.get("width") in (None, "") and values.get("cx") in (None, ""):
-            values["width"], values["height"] = width, height
-        camera, principal_point = None, None
-        if source != "estimated":
-            camera = view_from_values(values, "options").intrinsics
-        elif own.get("cx") not in (None, ""):
-            view = view_from_values({**values, "focal": 1.0}, "options")
-            principal_point = (view.cx, view.cy)
-        estimate = estimate_pose(frame.pixels, camera, principal_point=principal_point,
-                                 wall=options.wall)
-        row = estimate_row(estimate, source)
-        try:
-            checked(estimate, options)
-        except EstimateError as error:
-            return [{**row, "status": "error", "error": str(error)}]
-        row.update(estimated_values(estimate, camera, width, height, principal_point))
-        return [{**row, "status": "ok"}]
-    return work
+    return EstimateFrames(options, {name: value for name, value in run.fallback.items()
+                                    if name not in ("pan", "tilt", "roll")})
 
 
 @dataclass(frozen=True)
@@ -342,10 +303,12 @@ ESTIMATE_REFUSED = {"sidecar": "--sidecar", "recursive": "-r", "draw": "--draw",
 
 
 def estimate_video(video: str, output: str, table_format: str, options: Any,
-                   fallback: Mapping[str, Any], quiet: bool) -> None:
+                   fallback: Mapping[str, Any], quiet: bool, jobs: int | None = None) -> None:
     """``gsrwt estimate VIDEO``: every frame's pose from its lines, as sidecar rows with the
     frame and time in front (``options``: :class:`~gsrwt_cli.batch.estimate_jobs.
-    EstimateOptions`), into ``output`` (``-``: stdout) as ``table_format``."""
+    EstimateOptions`), into ``output`` (``-``: stdout) as ``table_format``; ``jobs``: worker
+    processes (default: the cores less one, the decoder's; 1: in this process)."""
+    from ..batch.rectify_jobs import worker_context
     from ..inputs.sidecar import display_path
     from ..io.storage import location
     from ..io.targets import file_identity
@@ -372,7 +335,9 @@ def estimate_video(video: str, output: str, table_format: str, options: Any,
             counts["ok" if row.get("status") == "ok" else "failed"] += 1
             writer.write_row(row)
 
-        write_frame_rows(frame_rows(run, estimate_work(run, options)), write)
+        processes = jobs if jobs is not None else max(1, (os.cpu_count() or 1) - 1)
+        write_frame_rows(frame_rows(run, estimate_work(run, options), processes,
+                                    worker_context(False)), write)
         writer.close()
     end_batch(f"{counts['ok']} frames estimated, {counts['failed']} failed",
               "" if output == "-" else f"; table: {display_path(output)}", None,

@@ -82,7 +82,7 @@ def test_params_per_frame_are_params_of_each_frame_as_a_still(tmp_path: Path, sw
 def test_estimate_per_frame_recovers_each_frames_pose(tmp_path: Path) -> None:
     """Rooms rendered through OpenCV's own projection at known poses, one per frame: each
     frame's estimate is within 0.5 degree (the tolerance of the still room in
-    tests/cli/test_estimate.py)."""
+    tests/cli/test_estimate.py), in one process or on workers."""
     poses = [(20, -8, 3), (12, -4, 2), (5, 0, 0), (-3, 4, -1), (-10, 8, -2)]
     frames = [render_room(pan, tilt, roll, focal=520, seed=4).image
               for pan, tilt, roll in poses]
@@ -99,6 +99,10 @@ def test_estimate_per_frame_recovers_each_frames_pose(tmp_path: Path) -> None:
         assert float(row["pan"]) == pytest.approx(pan, abs=0.5)
         assert float(row["tilt"]) == pytest.approx(tilt, abs=0.5)
         assert float(row["roll"]) == pytest.approx(roll, abs=0.5)
+    # Two worker processes (the frames still decoded by the command): the same rows.
+    result = run_gsrwt("estimate", video, "--focal", "520", "-j", "2", "-f", "csv")
+    assert result.returncode == 0, result.stderr
+    assert read_table(result.stdout) == rows
 
 
 def _knob_texture() -> tuple[np.ndarray, tuple[float, float]]:
