@@ -76,12 +76,17 @@ def frame_values(poses: PoseLog, timeline: Timeline, moment: float, index: int,
 
 def sequence_frames(path: Path, poses: PoseLog | None = None, *, time_mode: str = "relative",
                     max_gap: float = 0.5, fallback: Mapping[str, Any] | None = None,
-                    max_pixels: float = math.inf) -> Iterator[SequenceFrame]:
+                    max_pixels: float = math.inf,
+                    frames: tuple[int, int | None, int] | None = None
+                    ) -> Iterator[SequenceFrame]:
     """Every frame of the video at ``path``, in presentation order, with its view values:
     the pose file's at the frame's time (``time_mode``: ``relative`` or ``absolute``) merged
     over ``fallback``, or ``fallback`` alone when there is no pose file and it gives a pose
-    (every frame the same view), else None. Raises
-    :class:`~gsrwt_cli.inputs.videos.VideoError` when the file is no video at all."""
+    (every frame the same view), else None. ``frames``: ``(start, stop, step)``, only the
+    frames of that slice of indices (every frame is still decoded up to ``stop``, where
+    decoding ends). Raises :class:`~gsrwt_cli.inputs.videos.VideoError` when the file is no
+    video at all."""
+    start, stop, step = frames or (0, None, 1)
     fallback = dict(fallback or {})
     fixed = None
     if poses is None and {"pan", "tilt", "roll"} & set(fallback):
@@ -99,6 +104,10 @@ def sequence_frames(path: Path, poses: PoseLog | None = None, *, time_mode: str 
                 yield SequenceFrame(count, None, error=str(error), end=True)
                 return
             count = item.index + 1
+            if stop is not None and item.index >= stop:
+                return
+            if item.index < start or (item.index - start) % step:
+                continue
             if isinstance(item, FrameFailure):
                 yield SequenceFrame(item.index, item.time, error=item.reason)
                 continue

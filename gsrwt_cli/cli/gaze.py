@@ -30,7 +30,7 @@ from .options import (
     view_from_options,
     view_options,
 )
-from .sequence_options import pose_file_options, video_argument
+from .sequence_options import frames_option, pose_file_options, video_argument
 
 #: ``gsrwt match``'s default edge threshold (vision/ght.py's, repeated here so that the
 #: light ``gaze`` and ``track`` load no numpy; tests/cli/test_sequences.py checks it).
@@ -111,6 +111,7 @@ TRACK_CAMERA_OPTIONS = {name: VIEW_OPTIONS[name] for name in ("focal", "fx", "fy
                "camera_info) with the intrinsics and lens.")
 @pose_file_options("each frame is rectified with its pose, the landmark found on that "
                    "canonical view")
+@frames_option
 @click.option("--scales", default="0.9,1.1", show_default=True, metavar="MIN,MAX",
               help="With VIDEO: scale range of the landmark (as for gsrwt match).")
 @click.option("--scale-steps", type=Integer(min=1), default=5, show_default=True)
@@ -123,7 +124,8 @@ TRACK_CAMERA_OPTIONS = {name: VIEW_OPTIONS[name] for name in ("focal", "fx", "fy
 def track(video: str | None, distance: float | None, height: float | None,
           object_position: float | None, positions: str | None, template: Path | None,
           poses: str | None, time_mode: str, max_pose_gap: float, scales: str,
-          scale_steps: int, min_score: float, edge_threshold: float, fmt: str | None,
+          scale_steps: int, min_score: float, edge_threshold: float,
+          frame_range: tuple[int, int | None, int] | None, fmt: str | None,
           **camera: Any) -> None:
     """Pan and tilt that keep an object centred as the robot drives along the wall.
 
@@ -145,13 +147,14 @@ def track(video: str | None, distance: float | None, height: float | None,
     if video is not None:
         _track_video(ctx, video, distance, height, object_position, positions, template,
                      poses, time_mode, max_pose_gap, scales, scale_steps, min_score,
-                     edge_threshold, fmt, camera)
+                     edge_threshold, fmt, camera, frame_range)
         return
     video_options = {"template": "--template", "poses": "--poses", "camera": "--camera",
                      **{name: f"--{name}" for name in TRACK_CAMERA_OPTIONS},
                      "time_mode": "--time", "max_pose_gap": "--max-pose-gap",
                      "scales": "--scales", "scale_steps": "--scale-steps",
-                     "min_score": "--min-score", "edge_threshold": "--edge-threshold"}
+                     "min_score": "--min-score", "edge_threshold": "--edge-threshold",
+                     "frame_range": "--frames"}
     for name, flag in video_options.items():
         if ctx.get_parameter_source(name) not in (None, ParameterSource.DEFAULT):
             raise click.UsageError(f"{flag} applies to a VIDEO only (gsrwt track VIDEO "
@@ -179,7 +182,8 @@ def _track_video(ctx: click.Context, video: str, distance: float | None, height:
                  object_position: float | None, positions: str | None, template: Path | None,
                  poses: str | None, time_mode: str, max_pose_gap: float, scales: str,
                  scale_steps: int, min_score: float, edge_threshold: float, fmt: str | None,
-                 camera: dict[str, Any]) -> None:
+                 camera: dict[str, Any],
+                 frame_range: tuple[int, int | None, int] | None = None) -> None:
     """``gsrwt track VIDEO --poses FILE --template FILE``: the landmark and its gaze command
     in every frame."""
     from ..tables.columns import TRACK_SEQUENCE_COLUMNS
@@ -209,7 +213,7 @@ def _track_video(ctx: click.Context, video: str, distance: float | None, height:
         fallback["distance"] = distance
     scale_list = _parse_scales(scales, scale_steps)
     run = open_video_run(video, poses, time_mode, max_pose_gap, fallback,
-                         needs_poses="track")
+                         needs_poses="track", frame_range=frame_range)
     models = template_models([template], edge_threshold)
     search = TemplateSearch([(path.name, model) for path, model in models], scale_list,
                             min_score, 1, edge_threshold)

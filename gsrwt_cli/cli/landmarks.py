@@ -55,7 +55,7 @@ from .options import (
     view_defaults,
     view_options,
 )
-from .sequence_options import pose_file_options
+from .sequence_options import frames_option, pose_file_options
 
 
 def _image_paths(images: tuple[Path | Location, ...]) -> list[Path | Location]:
@@ -170,12 +170,14 @@ def _min_length_px(view: CanonicalView, pixels: float, units: float | None) -> f
 @functools.partial(orientation_option, names=("--exif-orientation",))
 @draw_option("lines")
 @pose_file_options("each frame is rectified with its pose first")
+@frames_option
 @format_option
 def lines(images: tuple[Path, ...], sidecar: Path | None, edge_threshold: float,
           theta_step: float, min_votes: int, max_gap: float, min_length: float,
           min_length_units: float | None, orientation: str, exif_orientation: str,
           draw: Path | None, poses: str | None, time_mode: str, max_pose_gap: float,
-          fmt: str | None, **view_kwargs: Any) -> None:
+          frame_range: tuple[int, int | None, int] | None, fmt: str | None,
+          **view_kwargs: Any) -> None:
     """Straight segments (door boundaries) by the Hough transform on frontal views (Sec. 5.2.2).
 
     Edges: thin hysteresis edges of the smoothed 3x3 Sobel gradient, compensated for the
@@ -193,7 +195,7 @@ def lines(images: tuple[Path, ...], sidecar: Path | None, edge_threshold: float,
     Example:
       gsrwt lines sample_data/views --sidecar sample_data/views/views.csv --orientation vertical
     """
-    video = _video_run(images, poses, time_mode, max_pose_gap, view_kwargs)
+    video = _video_run(images, poses, time_mode, max_pose_gap, view_kwargs, frame_range)
     if video is not None:
         from ..tables.columns import LINES_SEQUENCE_COLUMNS
         from .sequences import LineSearch, lines_work, print_frame_rows
@@ -230,7 +232,8 @@ def lines(images: tuple[Path, ...], sidecar: Path | None, edge_threshold: float,
 
 
 def _video_run(images: tuple[Path, ...], poses: str | None, time_mode: str,
-               max_pose_gap: float, view_kwargs: dict[str, Any]) -> Any:
+               max_pose_gap: float, view_kwargs: dict[str, Any],
+               frame_range: tuple[int, int | None, int] | None = None) -> Any:
     """The checked video run (:class:`~gsrwt_cli.cli.sequences.VideoRun`) when the only
     IMAGE is a video, else None (``--poses`` then refused)."""
     from .sequences import (
@@ -243,11 +246,12 @@ def _video_run(images: tuple[Path, ...], poses: str | None, time_mode: str,
 
     video = video_input(images)
     if video is None:
-        refuse_poses_without_video(poses)
+        refuse_poses_without_video(poses, frame_range)
         return None
     refuse_for_video(video, given_options(click.get_current_context(), {
         "sidecar": "--sidecar", "draw": "--draw", "exif_orientation": "--exif-orientation"}))
-    return open_video_run(video, poses, time_mode, max_pose_gap, view_defaults(view_kwargs))
+    return open_video_run(video, poses, time_mode, max_pose_gap, view_defaults(view_kwargs),
+                          frame_range=frame_range)
 
 
 def template_models(templates: Iterable[Path], edge_threshold: float,
@@ -300,11 +304,14 @@ def _parse_scales(text: str, steps: int) -> list[float]:
 @orientation_option
 @draw_option("matches")
 @pose_file_options("each frame is rectified with its pose first")
+@frames_option
 @format_option
 def match(images: tuple[Path, ...], templates: tuple[Path, ...], sidecar: Path | None,
           scales: str, scale_steps: int, min_score: float, max_matches: int,
           edge_threshold: float, exif_orientation: str, draw: Path | None, poses: str | None,
-          time_mode: str, max_pose_gap: float, fmt: str | None, **view_kwargs: Any) -> None:
+          time_mode: str, max_pose_gap: float,
+          frame_range: tuple[int, int | None, int] | None, fmt: str | None,
+          **view_kwargs: Any) -> None:
     """Find objects (door knob, peek window) with the Generalized Hough Transform (Sec. 5.2.2).
 
     The model is every edge pixel of the template image (the edges of gsrwt lines), its
@@ -323,7 +330,7 @@ def match(images: tuple[Path, ...], templates: tuple[Path, ...], sidecar: Path |
           --sidecar sample_data/views/views.csv
     """
     scale_list = _parse_scales(scales, scale_steps)
-    video = _video_run(images, poses, time_mode, max_pose_gap, view_kwargs)
+    video = _video_run(images, poses, time_mode, max_pose_gap, view_kwargs, frame_range)
     models = template_models(templates, edge_threshold, exif_orientation)
     if video is not None:
         from ..tables.columns import MATCH_SEQUENCE_COLUMNS

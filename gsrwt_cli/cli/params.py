@@ -20,7 +20,7 @@ from .options import (
     view_from_options,
     view_options,
 )
-from .sequence_options import pose_file_options, video_argument
+from .sequence_options import frames_option, pose_file_options, video_argument
 
 
 @click.command()
@@ -34,9 +34,11 @@ from .sequence_options import pose_file_options, video_argument
          "fields it leaves out.",
 )
 @pose_file_options("the frame's view")
+@frames_option
 @format_option
 def params(video: str | None, sidecar: Path | None, poses: str | None, time_mode: str,
-           max_pose_gap: float, fmt: str | None, **kwargs: Any) -> None:
+           max_pose_gap: float, frame_range: tuple[int, int | None, int] | None,
+           fmt: str | None, **kwargs: Any) -> None:
     """Print the GS-RWT parameters (theta, delta, a, gamma, vanishing point and line).
 
     For one view given by options, or for every row of a sidecar file. Rows are printed as
@@ -52,8 +54,9 @@ def params(video: str | None, sidecar: Path | None, poses: str | None, time_mode
     """
     from ..tables.writer import TableWriter
 
-    if video is not None or poses is not None:
-        _params_of_video(video, sidecar, poses, time_mode, max_pose_gap, fmt, kwargs)
+    if video is not None or poses is not None or frame_range is not None:
+        _params_of_video(video, sidecar, poses, time_mode, max_pose_gap, fmt, kwargs,
+                         frame_range)
         return
     defaults = view_defaults(kwargs)
     fmt = resolve_format(fmt)
@@ -116,7 +119,8 @@ def params(video: str | None, sidecar: Path | None, poses: str | None, time_mode
 
 def _params_of_video(video: str | None, sidecar: Path | None, poses: str | None,
                      time_mode: str, max_pose_gap: float, fmt: str | None,
-                     kwargs: dict[str, Any]) -> None:
+                     kwargs: dict[str, Any],
+                     frame_range: tuple[int, int | None, int] | None = None) -> None:
     """``gsrwt params VIDEO --poses FILE``: the parameters of every frame's view."""
     from ..tables.columns import PARAMS_SEQUENCE_COLUMNS
     from .sequences import (
@@ -132,9 +136,9 @@ def _params_of_video(video: str | None, sidecar: Path | None, poses: str | None,
         if video is not None:
             raise click.UsageError(f"VIDEO {video}: not a video name (a file ending in .mp4, "
                                    ".mkv, .avi, .mov, .webm or .m4v)")
-        refuse_poses_without_video(poses)
+        refuse_poses_without_video(poses, frame_range)
     assert video is not None
     refuse_for_video(video, {"--sidecar": sidecar is not None})
     run = open_video_run(video, poses, time_mode, max_pose_gap, view_defaults(kwargs),
-                         needs_poses="params")
+                         needs_poses="params", frame_range=frame_range)
     print_frame_rows(run, params_work(run), PARAMS_SEQUENCE_COLUMNS, fmt)

@@ -14,6 +14,8 @@ from typing import Any, TypeVar
 
 import click
 
+from ..base.messages import quote
+from ..base.numerals import parse_whole
 from .options import Number
 
 F = TypeVar("F", bound=Callable[..., Any])
@@ -49,3 +51,36 @@ def pose_file_options(what: str) -> Callable[[F], F]:
             help="A video's poses: a CSV or YAML file of a time and a pose per row, as "
                  f"'gsrwt rectify --poses' reads it, interpolated to each frame: {what}.")(func)
     return decorate
+
+
+#: ``--frames``: which frames, as (start, stop or None, step).
+FrameRange = tuple[int, int | None, int]
+
+
+def _frame_range(ctx: click.Context, param: click.Parameter, text: str | None
+                 ) -> FrameRange | None:
+    """``START:STOP[:STEP]`` as a Python slice of frame indices (each part may be left out)."""
+    if text is None:
+        return None
+    parts = text.split(":")
+    try:
+        if len(parts) not in (2, 3):
+            raise ValueError
+        start, stop, *step = (parse_whole(part) if part.strip() else None for part in parts)
+        every = step[0] if step and step[0] is not None else 1
+        if every < 1 or (start or 0) < 0 or (stop is not None and stop < 0):
+            raise ValueError
+    except ValueError:
+        raise click.BadParameter(f"expected START:STOP or START:STOP:STEP (frame indices from "
+                                 f"0, STEP >= 1, each may be left out), got {quote(text)}"
+                                 ) from None
+    return start or 0, stop, every
+
+
+def frames_option(func: F) -> F:
+    """``--frames START:STOP[:STEP]``: a video's frames to work on."""
+    return click.option(
+        "--frames", "frame_range", default=None, metavar="START:STOP[:STEP]",
+        callback=_frame_range,
+        help="With a video: only these frames, a Python slice of their indices (0:300, "
+             "100:, ::10); decoding stops at STOP.")(func)

@@ -63,11 +63,12 @@ def refuse_for_video(video: str, given: Mapping[str, bool]) -> None:
             raise click.UsageError(f"{flag} does not apply to a video (INPUT {video})")
 
 
-def refuse_poses_without_video(poses: str | None) -> None:
-    """A usage error for ``--poses`` given with still images (or no input)."""
-    if poses is not None:
-        raise click.UsageError(
-            f"--poses applies to a video INPUT (a file ending in {', '.join(VIDEO_EXTENSIONS)})")
+def refuse_poses_without_video(poses: str | None, frame_range: object = None) -> None:
+    """A usage error for ``--poses`` or ``--frames`` given with still images (or no input)."""
+    for flag, value in (("--poses", poses), ("--frames", frame_range)):
+        if value is not None:
+            raise click.UsageError(f"{flag} applies to a video INPUT (a file ending in "
+                                   f"{', '.join(VIDEO_EXTENSIONS)})")
 
 
 @dataclass(frozen=True)
@@ -80,15 +81,19 @@ class VideoRun:
     time_mode: str = "relative"
     max_gap: float = 0.5
     fallback: Mapping[str, Any] = field(default_factory=dict)
+    #: ``--frames``: (start, stop or None, step).
+    frame_range: tuple[int, int | None, int] | None = None
 
     def frames(self) -> Iterator[SequenceFrame]:
         """The frames, decoded one at a time, with their view values."""
         return sequence_frames(Path(self.video), self.poses, time_mode=self.time_mode,
-                               max_gap=self.max_gap, fallback=self.fallback)
+                               max_gap=self.max_gap, fallback=self.fallback,
+                               frames=self.frame_range)
 
 
 def open_video_run(video: str, poses: str | None, time_mode: str, max_gap: float,
-                   fallback: Mapping[str, Any], needs_poses: str | None = None) -> VideoRun:
+                   fallback: Mapping[str, Any], needs_poses: str | None = None,
+                   frame_range: tuple[int, int | None, int] | None = None) -> VideoRun:
     """Check a video run before its first frame: usage errors (exit 2) for a missing
     ``--poses`` (``needs_poses``: what the command needs them for), a bad ``--max-pose-gap``,
     a video that is no file, no PyAV, a pose file that cannot be read."""
@@ -113,7 +118,7 @@ def open_video_run(video: str, poses: str | None, time_mode: str, max_gap: float
             raise InputError(f"--poses {error}") from None
     values = {name: value for name, value in fallback.items()
               if value is not None and not isinstance(value, bool)}
-    return VideoRun(video, log, time_mode, max_gap, values)
+    return VideoRun(video, log, time_mode, max_gap, values, frame_range)
 
 
 def frame_rows(run: VideoRun, work: FrameWork, processes: int = 1,
@@ -303,7 +308,8 @@ ESTIMATE_REFUSED = {"sidecar": "--sidecar", "recursive": "-r", "draw": "--draw",
 
 
 def estimate_video(video: str, output: str, table_format: str, options: Any,
-                   fallback: Mapping[str, Any], quiet: bool, jobs: int | None = None) -> None:
+                   fallback: Mapping[str, Any], quiet: bool, jobs: int | None = None,
+                   frame_range: tuple[int, int | None, int] | None = None) -> None:
     """``gsrwt estimate VIDEO``: every frame's pose from its lines, as sidecar rows with the
     frame and time in front (``options``: :class:`~gsrwt_cli.batch.estimate_jobs.
     EstimateOptions`), into ``output`` (``-``: stdout) as ``table_format``; ``jobs``: worker
@@ -321,7 +327,7 @@ def estimate_video(video: str, output: str, table_format: str, options: Any,
     refuse_for_video(video, given_options(ctx, ESTIMATE_REFUSED))
     if options.mode != "lines":
         raise click.UsageError(f"--auto {options.mode} does not apply to a video (INPUT {video})")
-    run = open_video_run(video, None, "relative", 0.0, fallback)
+    run = open_video_run(video, None, "relative", 0.0, fallback, frame_range=frame_range)
     if output != "-" and file_identity(location(output)) == file_identity(Path(video)):
         raise InputError(f"-o {output}: would overwrite an input; choose another path")
     prepare_table(output, "-o")

@@ -191,6 +191,14 @@ def test_a_cut_file_and_frames_without_a_pose_are_error_rows(tmp_path: Path, swe
     assert [int(row["frame"]) for row in rows] == list(range(len(rows)))
     assert rows[-1]["status"] == "error" and "cut short" in rows[-1]["error"]
     assert result.stderr.count("Error:") == 1 and "cut short" in result.stderr
+    # --frames: a slice of the frames; decoding stops at STOP, before the cut.
+    result = run_gsrwt("params", cut, "--poses", log, "--focal", str(FOCAL), "--frames",
+                       f"0:{len(decoded) - 1}:2", "-f", "csv")
+    assert result.returncode == 0, result.stderr
+    rows = read_table(result.stdout)
+    assert [int(row["frame"]) for row in rows] == list(range(0, len(decoded) - 1, 2))
+    assert {row["status"] for row in rows} == {"ok"}
+    assert float(rows[1]["pan_deg"]) == pytest.approx(poses[2][0], abs=1e-4)
 
     holes = tmp_path / "holes.csv"
     write_pose_log(holes, times[[0, COUNT - 1]], poses[[0, COUNT - 1]])
@@ -220,6 +228,9 @@ def test_usage_errors_are_one_line(tmp_path: Path, sweep) -> None:
         (("estimate", video, "--draw", tmp_path / "d"), "--draw does not apply to a video"),
         (("estimate", video, "--auto", "document"), "--auto document does not apply"),
         (("params", tmp_path / "none.mkv", "--poses", log, "--focal", "300"), "no such file"),
+        (("params", video, "--poses", log, "--focal", "300", "--frames", "3:x"),
+         "expected START:STOP or START:STOP:STEP"),
+        (("lines", still, "--frames", "0:3"), "--frames applies to a video"),
     ]:
         result = run_gsrwt(*args)
         assert result.returncode == 2, (args, result.stderr)
