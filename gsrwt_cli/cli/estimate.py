@@ -51,6 +51,7 @@ from .rectify import (
     parse_pixel_count,
     stop_on_signals,
 )
+from .sequence_options import frames_option
 
 #: The camera options of ``estimate`` (a pose is what it finds, so no --pan/--tilt/--roll).
 CAMERA_OPTIONS = {
@@ -102,21 +103,22 @@ camera_options = field_options(
 @orientation_option
 @lens_profile_option
 @jobs_option
+@frames_option
 @quiet_option("No summary on stderr.")
 def estimate(inputs: tuple[str, ...], output: str | None, fmt: str | None, recursive: bool,
              sidecar: Path | None, auto: str, min_confidence: float, wall: str,
              draw: Path | None,
              max_input_pixels: str, exif_orientation: str, lens_profile: str,
-             jobs: int | None, quiet: bool,
-             **camera: Any) -> None:
+             jobs: int | None, frame_range: tuple[int, int | None, int] | None,
+             quiet: bool, **camera: Any) -> None:
     """Estimate pan, tilt and roll of each image from its straight lines (thesis future work 1).
 
     Writes one sidecar row per image: image, pan, tilt, roll, focal, cx, cy, width,
     height (what 'gsrwt rectify --sidecar' reads), then confidence, segments, inliers,
     focal_source, aspect and aspect_source, the three vanishing points in pixels, status and
     error. Images that cannot tell their pose get status error and no pose. With guides
-    (--corners, --verticals, --horizontals) the pose is the one they show. Exit code 1 if
-    any failed.
+    (--corners, --verticals, --horizontals) the pose is the one they show. A video as the
+    only INPUT gives a row per frame (frame, time in front). Exit code 1 if any failed.
 
     \b
     Examples:
@@ -134,6 +136,19 @@ def estimate(inputs: tuple[str, ...], output: str | None, fmt: str | None, recur
                                      ".md or .yaml, or give --format", param_hint="'-o'")
     else:
         table_format, output = resolve_format(fmt), "-"
+    from .sequences import refuse_poses_without_video, video_input
+
+    video = video_input(inputs)
+    if video is None:
+        refuse_poses_without_video(None, frame_range)
+    if video is not None:
+        from .sequences import estimate_video
+
+        check_lens_profile(lens_profile)
+        estimate_video(video, output, table_format, EstimateOptions(
+            min_confidence, wall, input_pixel_limit, exif_orientation, auto, lens_profile),
+            view_defaults(camera), quiet, jobs, frame_range)
+        return
     if str(sidecar) == "-" and "-" in inputs:
         raise InputError("--sidecar - and INPUT - cannot both read standard input")
     loaded = load_sidecar_option(sidecar)

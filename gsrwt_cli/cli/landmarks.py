@@ -55,6 +55,7 @@ from .options import (
     view_defaults,
     view_options,
 )
+from .sequence_options import frames_option, pose_file_options
 
 
 def _image_paths(images: tuple[Path | Location, ...]) -> list[Path | Location]:
@@ -168,11 +169,15 @@ def _min_length_px(view: CanonicalView, pixels: float, units: float | None) -> f
                                       "5 degrees).")
 @functools.partial(orientation_option, names=("--exif-orientation",))
 @draw_option("lines")
+@pose_file_options("each frame is rectified with its pose first")
+@frames_option
 @format_option
 def lines(images: tuple[Path, ...], sidecar: Path | None, edge_threshold: float,
           theta_step: float, min_votes: int, max_gap: float, min_length: float,
           min_length_units: float | None, orientation: str, exif_orientation: str,
-          draw: Path | None, fmt: str | None, **view_kwargs: Any) -> None:
+          draw: Path | None, poses: str | None, time_mode: str, max_pose_gap: float,
+          frame_range: tuple[int, int | None, int] | None, fmt: str | None,
+          **view_kwargs: Any) -> None:
     """Straight segments (door boundaries) by the Hough transform on frontal views (Sec. 5.2.2).
 
     Edges: thin hysteresis edges of the smoothed 3x3 Sobel gradient, compensated for the
@@ -183,9 +188,22 @@ def lines(images: tuple[Path, ...], sidecar: Path | None, edge_threshold: float,
     segment's end points in the frontal view, x1_src..y2_src in the original image.
 
     \b
+    A video as the only IMAGE (with --poses, or the view options for a fixed camera) gives
+    each frame's segments, frame and time in front, status at the end (none: no segment).
+
+    \b
     Example:
       gsrwt lines sample_data/views --sidecar sample_data/views/views.csv --orientation vertical
     """
+    video = _video_run(images, poses, time_mode, max_pose_gap, view_kwargs, frame_range)
+    if video is not None:
+        from ..tables.columns import LINES_SEQUENCE_COLUMNS
+        from .sequences import LineSearch, lines_work, print_frame_rows
+
+        search = LineSearch(edge_threshold, theta_step, min_votes, max_gap, min_length,
+                            min_length_units, orientation)
+        print_frame_rows(video, lines_work(video, search), LINES_SEQUENCE_COLUMNS, fmt)
+        return
     paths = _image_paths(images)
     views = _sources(paths, sidecar, view_kwargs, exif_orientation)
     drawings = _start_drawings(draw, [*paths, *([sidecar] if sidecar else [])])
@@ -211,6 +229,46 @@ def lines(images: tuple[Path, ...], sidecar: Path | None, edge_threshold: float,
     writer.close()
     if failures:
         sys.exit(1)
+
+
+def _video_run(images: tuple[Path, ...], poses: str | None, time_mode: str,
+               max_pose_gap: float, view_kwargs: dict[str, Any],
+               frame_range: tuple[int, int | None, int] | None = None) -> Any:
+    """The checked video run (:class:`~gsrwt_cli.cli.sequences.VideoRun`) when the only
+    IMAGE is a video, else None (``--poses`` then refused)."""
+    from .sequences import (
+        given_options,
+        open_video_run,
+        refuse_for_video,
+        refuse_poses_without_video,
+        video_input,
+    )
+
+    video = video_input(images)
+    if video is None:
+        refuse_poses_without_video(poses, frame_range)
+        return None
+    refuse_for_video(video, given_options(click.get_current_context(), {
+        "sidecar": "--sidecar", "draw": "--draw", "exif_orientation": "--exif-orientation"}))
+    return open_video_run(video, poses, time_mode, max_pose_gap, view_defaults(view_kwargs),
+                          frame_range=frame_range)
+
+
+def template_models(templates: Iterable[Path], edge_threshold: float,
+                    exif_orientation: str = "exif") -> list[tuple[Path, Template]]:
+    """The GHT model of each ``--template`` file (every edge pixel of it, the edges of
+    ``gsrwt lines``); a template that cannot be read is an error naming it."""
+    models: list[tuple[Path, Template]] = []
+    for path in templates:
+        try:
+            turn = 1 if exif_orientation == "ignore" else file_orientation(path)
+            grey = grey8(read_image(path, orientation=turn))
+            edges = line_edges(grey, edge_threshold,
+                               orientation_smoothing=MATCH_ORIENTATION_SMOOTHING)
+            models.append((path, build_template(grey, edges=edges)))
+        except (ImageError, ValueError) as error:
+            raise InputError(f"--template {path}: {error}") from None
+    return models
 
 
 def _parse_scales(text: str, steps: int) -> list[float]:
@@ -245,10 +303,14 @@ def _parse_scales(text: str, steps: int) -> list[float]:
                         "template and the views.")
 @orientation_option
 @draw_option("matches")
+@pose_file_options("each frame is rectified with its pose first")
+@frames_option
 @format_option
 def match(images: tuple[Path, ...], templates: tuple[Path, ...], sidecar: Path | None,
           scales: str, scale_steps: int, min_score: float, max_matches: int,
-          edge_threshold: float, exif_orientation: str, draw: Path | None, fmt: str | None,
+          edge_threshold: float, exif_orientation: str, draw: Path | None, poses: str | None,
+          time_mode: str, max_pose_gap: float,
+          frame_range: tuple[int, int | None, int] | None, fmt: str | None,
           **view_kwargs: Any) -> None:
     """Find objects (door knob, peek window) with the Generalized Hough Transform (Sec. 5.2.2).
 
@@ -257,6 +319,10 @@ def match(images: tuple[Path, ...], templates: tuple[Path, ...], sidecar: Path |
     on frontal views one fixed model serves every camera angle. x, y: the object's centre
     in the frontal view; x_src, y_src: in the original image.
 
+    A video as the only IMAGE (with --poses, or the view options for a fixed camera) gives
+    each frame's matches, frame and time in front, status at the end (none: a template not
+    found).
+
     \b
     Example:
       gsrwt match sample_data/views/door_p20_t-8_f800.jpg \\
@@ -264,16 +330,16 @@ def match(images: tuple[Path, ...], templates: tuple[Path, ...], sidecar: Path |
           --sidecar sample_data/views/views.csv
     """
     scale_list = _parse_scales(scales, scale_steps)
-    models: list[tuple[Path, Template]] = []
-    for path in templates:
-        try:
-            turn = 1 if exif_orientation == "ignore" else file_orientation(path)
-            grey = grey8(read_image(path, orientation=turn))
-            edges = line_edges(grey, edge_threshold,
-                               orientation_smoothing=MATCH_ORIENTATION_SMOOTHING)
-            models.append((path, build_template(grey, edges=edges)))
-        except (ImageError, ValueError) as error:
-            raise InputError(f"--template {path}: {error}") from None
+    video = _video_run(images, poses, time_mode, max_pose_gap, view_kwargs, frame_range)
+    models = template_models(templates, edge_threshold, exif_orientation)
+    if video is not None:
+        from ..tables.columns import MATCH_SEQUENCE_COLUMNS
+        from .sequences import TemplateSearch, match_work, print_frame_rows
+
+        search = TemplateSearch([(path.name, model) for path, model in models], scale_list,
+                                min_score, max_matches, edge_threshold)
+        print_frame_rows(video, match_work(video, search), MATCH_SEQUENCE_COLUMNS, fmt)
+        return
     paths = _image_paths(images)
     views = _sources(paths, sidecar, view_kwargs, exif_orientation)
     drawings = _start_drawings(draw, [*paths, *templates, *([sidecar] if sidecar else [])])

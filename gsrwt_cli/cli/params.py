@@ -20,9 +20,11 @@ from .options import (
     view_from_options,
     view_options,
 )
+from .sequence_options import frames_option, pose_file_options, video_argument
 
 
 @click.command()
+@video_argument
 @view_options
 @guide_options
 @click.option(
@@ -31,13 +33,19 @@ from .options import (
     help="CSV or YAML of views, one row per image (a path or a URL); options above fill "
          "fields it leaves out.",
 )
+@pose_file_options("the frame's view")
+@frames_option
 @format_option
-def params(sidecar: Path | None, fmt: str | None, **kwargs: Any) -> None:
+def params(video: str | None, sidecar: Path | None, poses: str | None, time_mode: str,
+           max_pose_gap: float, frame_range: tuple[int, int | None, int] | None,
+           fmt: str | None, **kwargs: Any) -> None:
     """Print the GS-RWT parameters (theta, delta, a, gamma, vanishing point and line).
 
     For one view given by options, or for every row of a sidecar file. Rows are printed as
     they are computed; a row that is no valid view is reported on stderr (naming its line)
-    and left out, and the command then exits with status 2.
+    and left out, and the command then exits with status 2. With a VIDEO and --poses: a row
+    per frame (frame, time in front; status, error at the end), exit status 1 if any frame
+    failed.
 
     \b
     Examples:
@@ -46,6 +54,10 @@ def params(sidecar: Path | None, fmt: str | None, **kwargs: Any) -> None:
     """
     from ..tables.writer import TableWriter
 
+    if video is not None or poses is not None or frame_range is not None:
+        _params_of_video(video, sidecar, poses, time_mode, max_pose_gap, fmt, kwargs,
+                         frame_range)
+        return
     defaults = view_defaults(kwargs)
     fmt = resolve_format(fmt)
     if sidecar is None:
@@ -103,3 +115,30 @@ def params(sidecar: Path | None, fmt: str | None, **kwargs: Any) -> None:
     writer.close()
     if last_error is not None:
         raise InputError(last_error)
+
+
+def _params_of_video(video: str | None, sidecar: Path | None, poses: str | None,
+                     time_mode: str, max_pose_gap: float, fmt: str | None,
+                     kwargs: dict[str, Any],
+                     frame_range: tuple[int, int | None, int] | None = None) -> None:
+    """``gsrwt params VIDEO --poses FILE``: the parameters of every frame's view."""
+    from ..tables.columns import PARAMS_SEQUENCE_COLUMNS
+    from .sequences import (
+        open_video_run,
+        params_work,
+        print_frame_rows,
+        refuse_for_video,
+        refuse_poses_without_video,
+        video_input,
+    )
+
+    if video is None or video_input([video]) is None:
+        if video is not None:
+            raise click.UsageError(f"VIDEO {video}: not a video name (a file ending in .mp4, "
+                                   ".mkv, .avi, .mov, .webm or .m4v)")
+        refuse_poses_without_video(poses, frame_range)
+    assert video is not None
+    refuse_for_video(video, {"--sidecar": sidecar is not None})
+    run = open_video_run(video, poses, time_mode, max_pose_gap, view_defaults(kwargs),
+                         needs_poses="params", frame_range=frame_range)
+    print_frame_rows(run, params_work(run), PARAMS_SEQUENCE_COLUMNS, fmt)

@@ -66,3 +66,26 @@ TRACK_COLUMNS = ("position", "pan_deg", "tilt_deg", "theta_deg", "foreshortening
 LINES_COLUMNS = ("image", "rho", "theta_deg", "votes", "x1", "y1", "x2", "y2",
                  "x1_src", "y1_src", "x2_src", "y2_src", "length", "contrast")
 MATCH_COLUMNS = ("image", "template", "x", "y", "scale", "votes", "score", "x_src", "y_src")
+
+#: The commands above on a video (``gsrwt params VIDEO --poses FILE``, ``estimate VIDEO``,
+#: ``lines VIDEO``, ``match VIDEO``): the frame's index (``frame``, from 0) and ``time``
+#: (seconds from the first frame) in front of the command's columns, and ``status`` and
+#: ``error`` at the end (``ok``; ``none`` for a frame where ``lines`` or ``match`` found
+#: nothing; ``error`` for a frame that cannot be decoded or has no pose).
+SEQUENCE_PREFIX = ("frame", "time")
+SEQUENCE_STATUSES = ("ok", "none", "error")
+PARAMS_SEQUENCE_COLUMNS = (*SEQUENCE_PREFIX, *PARAMS_COLUMNS, "status", "error")
+ESTIMATE_SEQUENCE_COLUMNS = (*SEQUENCE_PREFIX, *ESTIMATE_COLUMNS)
+LINES_SEQUENCE_COLUMNS = (*SEQUENCE_PREFIX, *LINES_COLUMNS, "status", "error")
+MATCH_SEQUENCE_COLUMNS = (*SEQUENCE_PREFIX, *MATCH_COLUMNS, "status", "error")
+
+#: ``gsrwt track VIDEO --poses FILE --template FILE`` (thesis Sec. 5.2.2-5.2.3): per frame,
+#: where the landmark was found (``x_src``, ``y_src`` in the frame; ``x``, ``y`` on its
+#: canonical view), its match, and the gaze command that centres it (``pan_deg``,
+#: ``tilt_deg``, and the wall point ``wall_x``, ``wall_y`` as ``gsrwt gaze`` gives it);
+#: ``status`` ``ok``, ``lost`` (not found: ``error`` says why) or ``error``.
+TRACK_SEQUENCE_COLUMNS = (
+    *SEQUENCE_PREFIX, "image", "template", "x_src", "y_src", "x", "y", "scale", "score",
+    "pan_deg", "tilt_deg", "wall_x", "wall_y", "status", "error",
+)
+TRACK_STATUSES = ("ok", "lost", "error")
