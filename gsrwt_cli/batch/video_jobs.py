@@ -60,6 +60,7 @@ from ..tables.rows import params_row, plan_row
 from .executor import ProcessExecutor
 from .frame_sources import (
     CachedTimeline,
+    EstimatedPoses,
     FramePoses,
     FrameSource,
     LogPoses,
@@ -96,7 +97,7 @@ class StreamJob:
     source: Path
     output: Path
     codec: str
-    poses: LogPoses | TopicPoses
+    poses: LogPoses | TopicPoses | EstimatedPoses
     open_source: Callable[[], FrameSource]
     made_with: str = ""
     #: ``--steady``: every frame framed on the wall the first frame's default frame shows.
@@ -128,6 +129,9 @@ class FrameJob:
     #: A bag output: the output's camera matrix comes back with the pixels (``_camera``).
     camera: bool = False
     pose_source: str = "poses"
+    #: ``rectify VIDEO --auto``: the confidence of the frame's own estimate (None: its pose
+    #: was interpolated between those of other frames, or not estimated).
+    confidence: float | None = None
 
 
 def output_of(source: Path, outdir: Path, codec: str) -> Path:
@@ -168,7 +172,7 @@ def process_frame(job: FrameJob, settings: Settings, made_with: str) -> Row:
             except RecordError as error:
                 raise JobError(str(error)) from None
             row.update(params_row(view, job.image), focal_source=job.focal_source,
-                       pose_source=job.pose_source)
+                       pose_source=job.pose_source, confidence=job.confidence)
             height, width = job.pixels.shape[:2]
             framing = settings.framing
             if job.steady_from is not None:
@@ -281,8 +285,8 @@ def run_stream(job: StreamJob, settings: Settings, processes: int,
     except (VideoError, BagError) as error:
         deliver({"image": image, "output": shown, "status": "error", "error": str(error)})
         return counts
-    poses = CachedTimeline(job.poses)
     try:
+        poses = CachedTimeline(job.poses)  # an estimated video's first pass, stoppable
         if job.codec == "png":
             _run(job, settings, processes, source, poses, deliver, on_progress, previous,
                  context, None)
@@ -602,9 +606,8 @@ def _frame_job(job: StreamJob, item: StreamFrame, poses: FramePoses, png: bool,
     """The frame's job: its view values from its poses, or the error it already has."""
     output = frame_file(job.output, item.index) if png else None
     shown = str(output) if output is not None else str(job.output)
-    pose_source = "bag" if isinstance(job.poses, TopicPoses) else "poses"
     base = FrameJob(image, item.index, item.time, None, None, "", output, shown,
-                    camera=job.codec == "bag", pose_source=pose_source)
+                    camera=job.codec == "bag", pose_source=poses.pose_source)
     if item.pixels is None:
         return replace(base, error=item.error or f"frame {item.index} has no image")
     try:
@@ -622,8 +625,10 @@ def _frame_job(job: StreamJob, item: StreamFrame, poses: FramePoses, png: bool,
                            error="its output exists from a run with other options (the "
                                  "previous table's made_with differs); use --overwrite to "
                                  "redo it")
+    confidence = getattr(poses, "confidence", {}).get(item.index)  # an estimated video's
     return replace(base, pixels=None if record else item.pixels, values=values, where=where,
-                   focal_source=focal_source, existed=existed, record=record)
+                   focal_source=focal_source, existed=existed, record=record,
+                   confidence=confidence)
 
 
 def remove_video_temporaries(job: StreamJob) -> None:

@@ -501,6 +501,10 @@ def dask_executor(address: str, processes: int, retries: int,
               show_default=True,
               help="With --poses or --pose-topic: a frame further than this many seconds "
                    "from every pose is an error row.")
+@click.option("--smooth", type=Number(min=0), default=0.0, metavar="SECONDS",
+              help="With --auto on a video: smooth the poses estimated frame by frame over a "
+                   "window of this many seconds (a robust local fit that outvotes a wrong "
+                   "frame; 0: each frame's own estimate).  [default: 0]")
 @click.option("--steady", is_flag=True,
               help="A video's or bag's: frame every frame on the wall the first frame's default "
                    "frame shows, so that the wall stands still in the output (one focal "
@@ -555,7 +559,7 @@ def rectify(inputs: tuple[str, ...], outdir: Path | Location, recursive: bool,
     run = RunOptions.pop_from(options)
     poses, time_mode = options.pop("poses"), options.pop("time_mode")
     max_pose_gap, codec = options.pop("max_pose_gap"), options.pop("codec")
-    steady = options.pop("steady")
+    steady, smooth = options.pop("steady"), options.pop("smooth")
     bag_options = BagOptions.pop_from(options)
     if bag_options.given() or any(is_bag_input(text) for text in inputs):
         from .bags import rectify_bag  # bags only when given
@@ -580,14 +584,24 @@ def rectify(inputs: tuple[str, ...], outdir: Path | Location, recursive: bool,
         if steady and options["bbox"] != "frontal":
             raise click.UsageError("--steady keeps the first frame's default frame: it "
                                    "needs --bbox frontal")
+        if smooth and options["auto"] is None:
+            raise click.UsageError("--smooth smooths poses estimated with --auto; a pose "
+                                   "file's are used as they are")
         settings, _ = settings_from_options(outdir, options)
         table_path = options.pop("table_path")
         table = table_from_options(outdir, table_path, None)
-        for name in ("auto", "min_confidence", "wall", "shard"):
-            options.pop(name)
+        auto, min_confidence, wall = (options.pop(name) for name in ("auto", "min_confidence",
+                                                                      "wall"))
+        options.pop("shard")
+        estimating = (EstimateOptions(min_confidence, wall, settings.max_input_pixels,
+                                      settings.orientation, auto, settings.lens_profile)
+                      if auto is not None else None)
         rectify_video(inputs, outdir, poses, time_mode, max_pose_gap, codec, settings, table,
-                      table_path is not None, run, view_defaults(options), steady)
+                      table_path is not None, run, view_defaults(options), steady,
+                      estimating, smooth)
         return
+    if smooth:
+        raise click.UsageError("--smooth applies to a video with --auto only")
     if steady:
         raise click.UsageError("--steady applies to a video (with --poses) only")
     if codec == "bag":

@@ -22,7 +22,7 @@ import click
 from tqdm import tqdm
 
 from ..base.messages import one_line, quote
-from ..batch.frame_sources import LogPoses, VideoSource
+from ..batch.frame_sources import EstimatedPoses, LogPoses, VideoSource
 from ..batch.rectify_jobs import Counts, Settings, worker_context
 from ..batch.reruns import made_with
 from ..batch.video_jobs import StreamJob, output_of, remove_video_temporaries, run_stream
@@ -49,16 +49,19 @@ def check_video_request(inputs: tuple[str, ...], poses: str | None, auto: str | 
     ``--poses`` (and ``--poses`` without one video), or options a video does not take
     (``refused``: the option's name and whether it was given)."""
     videos = video_inputs(inputs)
-    if poses is None:
-        if auto is not None:
-            raise click.UsageError(f"{videos[0]}: --auto does not estimate a video's poses yet; "
-                                   "give them with --poses FILE")
+    if poses is not None and auto is not None:
+        raise click.UsageError("use either --poses FILE or --auto for a video's poses, not both")
+    if auto == "document":
+        raise click.UsageError(f"{videos[0] if videos else inputs[0]}: --auto document does "
+                               "not apply to a video; --auto lines estimates each frame's pose")
+    if poses is None and auto is None:
         raise click.UsageError(f"{videos[0]}: a video needs --poses FILE (a pose per moment: "
-                               "time, pan, tilt, ...; see docs/COMMANDS.md#videos)")
+                               "time, pan, tilt, ...; see docs/COMMANDS.md#videos) or --auto")
     if len(inputs) != 1 or len(videos) != 1:
         raise click.UsageError(
-            "--poses takes one video as INPUT (a file ending in "
-            f"{', '.join(VIDEO_EXTENSIONS)}), got {' '.join(map(quote, inputs))}")
+            f"{'--poses' if poses is not None else 'a video run'} takes one video as INPUT "
+            f"(a file ending in {', '.join(VIDEO_EXTENSIONS)}), got "
+            f"{' '.join(map(quote, inputs))}")
     for name, given in refused.items():
         if given:
             raise click.UsageError(f"{name} does not apply to a video (INPUT {inputs[0]})")
@@ -92,11 +95,15 @@ def _check_first_view(log: PoseLog, fallback: dict[str, Any], poses: str) -> Non
         raise InputError(f"{one_line(str(error), 300)}{hint}") from None
 
 
-def rectify_video(inputs: tuple[str, ...], outdir: Path | Location, poses: str,
+def rectify_video(inputs: tuple[str, ...], outdir: Path | Location, poses: str | None,
                   time_mode: str, max_gap: float, codec: str, settings: Settings,
                   table: Any, table_given: bool, run: Any,
-                  view_kwargs: dict[str, Any], steady: bool = False) -> None:
-    """Check, run and end a video run (the command's exit status and last line)."""
+                  view_kwargs: dict[str, Any], steady: bool = False,
+                  estimating: Any = None, smooth: float = 0.0) -> None:
+    """Check, run and end a video run (the command's exit status and last line): its poses
+    from the pose file ``poses``, or estimated frame by frame (``estimating``: the
+    :class:`~gsrwt_cli.batch.estimate_jobs.EstimateOptions` of ``--auto``), smoothed over
+    ``smooth`` seconds."""
     if isinstance(outdir, Location):
         raise InputError(f"-o {outdir}: videos are written to a local directory only")
     if codec == "bag":
@@ -112,18 +119,43 @@ def rectify_video(inputs: tuple[str, ...], outdir: Path | Location, poses: str,
     except VideoError as error:
         raise InputError(f"{inputs[0]}: {error}") from None
     check_codec(codec, settings)
-    log = read_pose_log(poses, max_gap)
     fallback = view_fallback(view_kwargs)
-    _check_first_view(log, fallback, poses)
     output = output_of(source, outdir, codec)
-    words = stream_words(fallback, settings, codec, output) + (
-        f" poses=sha256:{log.digest} time={time_mode} max_pose_gap={max_gap:g} "
-        f"codec={codec}" + (" steady=on" if steady else ""))
-    job = StreamJob(source, output, codec, LogPoses(log, time_mode, max_gap, fallback, {}),
+    words = stream_words(fallback, settings, codec, output)
+    given = {file_identity(source)}
+    frame_poses: LogPoses | EstimatedPoses
+    if poses is not None:
+        log = read_pose_log(poses, max_gap)
+        _check_first_view(log, fallback, poses)
+        words += f" poses=sha256:{log.digest} time={time_mode}"
+        frame_poses = LogPoses(log, time_mode, max_gap, fallback, {})
+        given.add(file_identity(Path(poses)))
+    else:
+        frame_poses = _estimated_poses(source, estimating, smooth, max_gap, fallback,
+                                       settings, run)
+        words += (f" auto=lines wall={estimating.wall} min_confidence="
+                  f"{estimating.min_confidence:g} smooth={smooth:g}")
+    words += f" max_pose_gap={max_gap:g} codec={codec}" + (" steady=on" if steady else "")
+    job = StreamJob(source, output, codec, frame_poses,
                     partial(VideoSource, source, settings.max_input_pixels), words.strip(),
                     steady)
-    run_stream_command(job, outdir, settings, table, table_given, run,
-                       {file_identity(source), file_identity(Path(poses))})
+    run_stream_command(job, outdir, settings, table, table_given, run, given)
+
+
+def _estimated_poses(source: Path, estimating: Any, smooth: float, max_gap: float,
+                     fallback: dict[str, Any], settings: Settings, run: Any) -> EstimatedPoses:
+    """The poses of ``rectify VIDEO --auto``: each frame's estimate (on the ``-j`` workers,
+    as ``gsrwt estimate VIDEO``), smoothed over ``smooth`` seconds."""
+    from ..batch.frame_sequences import sequence_frames
+    from ..batch.sequence_workers import EstimateFrames
+
+    jobs = run.jobs if run.jobs is not None else max(1, (os.cpu_count() or 1) - 1)
+    own = {name: value for name, value in fallback.items() if name not in ("pan", "tilt",
+                                                                            "roll")}
+    return EstimatedPoses(partial(sequence_frames, source,
+                                  max_pixels=settings.max_input_pixels),
+                          EstimateFrames(estimating, own), smooth, max_gap, fallback, jobs,
+                          worker_context(False))
 
 
 def check_max_pose_gap(max_gap: float) -> None:

@@ -42,6 +42,32 @@ ROBUST_SCALE_DEGREES = 2.0
 ROBUST_ITERATIONS = 4
 
 
+def one_wall(pans: Sequence[float]) -> list[float]:
+    """Pans (degrees, in time order) of frames whose walls were chosen one frame at a time,
+    all made of one wall: the wall most of the frames chose.
+
+    A frame's estimate finds three orthogonal directions and calls one horizontal the
+    wall's normal; another frame of the same scene may call the other one so (a building's
+    corner turning past 45 degrees, ``--wall dominant`` weighing its two faces), and its pan
+    is then the same camera's by a multiple of 90 degrees: ``Rx(pan + 90) Ry(tilt) Rz(roll)``
+    is the pose of the same camera against the wall beside. Each pan is moved by the
+    multiple of 90 degrees that puts it within 45 degrees of the one before it (a camera
+    turns less than that between two frames), and the whole sequence then by the multiple
+    of 90 degrees that the most frames' own choices agree with (ties: the first frame's).
+    """
+    unwrapped: list[float] = []
+    for pan in pans:
+        if unwrapped:
+            pan -= 90.0 * round((pan - unwrapped[-1]) / 90.0)
+        unwrapped.append(float(pan))
+    offsets = [round((own - moved) / 90.0) for own, moved in zip(pans, unwrapped)]
+    if not offsets:
+        return []
+    votes = {offset: offsets.count(offset) for offset in offsets}
+    chosen = max(votes, key=lambda offset: (votes[offset], offset == offsets[0]))
+    return [pan + 90.0 * chosen for pan in unwrapped]
+
+
 def _tricube(offsets: np.ndarray, half_window: float) -> np.ndarray:
     """Cleveland's tricube kernel of ``offsets`` (seconds) over ``half_window`` seconds."""
     u = np.clip(np.abs(offsets) / half_window, 0.0, 1.0)

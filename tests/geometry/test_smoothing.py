@@ -96,3 +96,17 @@ def test_window_zero_and_bad_arguments():
         smooth_samples(samples, float("nan"))
     with pytest.raises(ValueError, match="weights"):
         smooth_samples(samples, 1.0, weights=[1.0, -1.0, 1.0, 1.0, 1.0])
+
+
+def test_one_wall_keeps_the_wall_most_frames_chose():
+    """A pan 90 degrees off is the same camera against the wall beside: turned back, unless
+    most frames chose that wall; a turn past 45 degrees between frames is followed."""
+    from gsrwt_cli.geometry.smoothing import one_wall
+
+    assert one_wall([-10.0, -12.0, 77.0, -15.0]) == [-10.0, -12.0, -13.0, -15.0]
+    assert one_wall([80.0, -5.0, -8.0]) == [-10.0, -5.0, -8.0]
+    # A camera turning from 30 to 70 degrees: its frames past 45 call the other wall
+    # theirs (pan 70 - 90); most do, so the whole video is of that wall.
+    assert one_wall([30.0, 40.0, 50.0 - 90.0, 60.0 - 90.0, 70.0 - 90.0]) == [
+        -60.0, -50.0, -40.0, -30.0, -20.0]
+    assert one_wall([]) == []

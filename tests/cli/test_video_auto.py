@@ -1,0 +1,97 @@
+"""``gsrwt rectify VIDEO --auto``: each frame's pose estimated from its own lines, one wall for
+the whole video, refused frames interpolated within --max-pose-gap, optionally smoothed
+(--smooth). Rooms rendered through OpenCV's own projection at known poses, one per frame,
+encoded losslessly by PyAV."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from tests.helpers.cli import run_gsrwt
+from tests.helpers.estimate_scenes import render_room
+from tests.helpers.tables import read_table
+
+pytest.importorskip("av")
+
+from tests.helpers.videos import write_video  # noqa: E402  (needs PyAV, checked above)
+
+#: (pan, tilt, roll) of each frame: a pan-tilt sweep at 10 frames per second.
+POSES = [(20 - 3 * i, -8 + 2 * i, 0.5 * i - 2) for i in range(12)]
+BLANK = 6  # a frame with nothing in it: its own estimate is refused
+
+
+@pytest.fixture(scope="module")
+def room_video(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    frames = [render_room(pan, tilt, roll, focal=520, seed=4).image for pan, tilt, roll in POSES]
+    frames[BLANK] = np.full_like(frames[BLANK], 128)
+    video = tmp_path_factory.mktemp("video") / "room.mkv"
+    write_video(video, frames, [index * 100 for index in range(len(frames))], rate=10)
+    return video
+
+
+def pose_errors(rows: list[dict[str, str]]) -> list[float]:
+    return [max(abs(float(row[f"{name}_deg"]) - truth)
+                for name, truth in zip(("pan", "tilt", "roll"), pose))
+            for row, pose in zip(rows, POSES, strict=True)]
+
+
+def test_each_frame_is_estimated_and_a_refused_one_interpolated(tmp_path, room_video):
+    result = run_gsrwt("rectify", room_video, "--auto", "--focal", "520", "--codec", "png",
+                       "-o", tmp_path / "out")
+    assert result.returncode == 0, result.stderr
+    rows = read_table(tmp_path / "out" / "room.csv")
+    assert [row["status"] for row in rows] == ["ok"] * len(POSES)
+    assert max(pose_errors(rows)) < 0.5
+    assert {row["pose_source"] for row in rows} == {"estimated"}
+    assert {row["focal_source"] for row in rows} == {"option"}
+    assert rows[BLANK]["confidence"] == "" and all(
+        float(row["confidence"]) >= 0.5 for index, row in enumerate(rows) if index != BLANK)
+    assert len(list((tmp_path / "out" / "room").glob("*.png"))) == len(POSES)
+    # No accepted estimate within --max-pose-gap: the frame's row is an error that gives
+    # its own estimate's reason.
+    result = run_gsrwt("rectify", room_video, "--auto", "--focal", "520", "--codec", "png",
+                       "--max-pose-gap", "0", "-o", tmp_path / "gap")
+    assert result.returncode == 1
+    rows = read_table(tmp_path / "gap" / "room.csv")
+    assert [row["status"] for row in rows].count("error") == 1
+    assert rows[BLANK]["error"].startswith("too few straight segments")
+    assert "the nearest accepted estimate is 0.1 s away (--max-pose-gap 0)" in rows[BLANK]["error"]
+
+
+def test_one_wall_for_the_whole_video_and_smoothing(tmp_path, room_video):
+    """Without the focal length and with --wall dominant, the last frame's own estimate
+    takes the side wall (pan 77 for -13); the video keeps the wall most frames chose. The
+    smoothed poses stay within half a degree, and a rerun skips every frame."""
+    single = run_gsrwt("estimate", room_video, "--wall", "dominant", "-f", "csv")
+    own = [float(row["pan"]) for row in read_table(single.stdout) if row["status"] == "ok"]
+    assert any(abs(pan - truth - 90) < 1 for pan, (truth, _, _) in zip(
+        own, [pose for index, pose in enumerate(POSES) if index != BLANK]))
+    arguments = ["rectify", room_video, "--auto", "--wall", "dominant", "--smooth", "0.5",
+                 "--codec", "png", "-o", tmp_path / "out"]
+    result = run_gsrwt(*arguments)
+    assert result.returncode == 0, result.stderr
+    rows = read_table(tmp_path / "out" / "room.csv")
+    assert max(pose_errors(rows)) < 0.5
+    assert {row["focal_source"] for row in rows} == {"estimated"}
+    assert all(abs(float(row["focal_px"]) - 520) < 10 for row in rows)
+    assert "auto=lines wall=dominant min_confidence=0.5 smooth=0.5" in rows[0]["made_with"]
+    again = run_gsrwt(*arguments)
+    assert again.returncode == 0 and f"0 frames ok, {len(POSES)} skipped" in again.stderr
+
+
+@pytest.mark.parametrize("arguments, message", [
+    (["--auto", "--poses", "poses.csv"], "use either --poses FILE or --auto"),
+    (["--auto", "document"], "--auto document does not apply to a video"),
+    (["--smooth", "1", "--poses", "poses.csv"], "--smooth smooths poses estimated with --auto"),
+])
+def test_usage_errors_are_one_line(tmp_path, room_video, arguments, message):
+    (tmp_path / "poses.csv").write_text("time,pan,tilt\n0,1,2\n")
+    result = run_gsrwt("rectify", room_video, *arguments, "--focal", "520", "-o", "out",
+                       cwd=tmp_path)
+    assert result.returncode == 2
+    (line,) = [line for line in result.stderr.splitlines() if line.startswith("Error:")]
+    assert message in line and "Traceback" not in result.stderr
+    assert not (tmp_path / "out").exists()
