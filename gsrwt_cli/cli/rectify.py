@@ -94,6 +94,7 @@ from .options import (
     guide_options,
     interpolation_option,
     jobs_option,
+    lens_from_lines_option,
     lens_profile_option,
     load_sidecar_option,
     max_input_pixels_option,
@@ -430,6 +431,7 @@ def dask_executor(address: str, processes: int, retries: int,
 @max_input_pixels_option
 @orientation_option
 @lens_profile_option
+@lens_from_lines_option
 @interpolation_option
 @click.option("--fill", type=Number(), default=0.0, show_default=True,
               help="Value of pixels with no source, in the image's units (0-255, 0-65535).")
@@ -552,7 +554,7 @@ def rectify(inputs: tuple[str, ...], outdir: Path | Location, recursive: bool,
     auto = options.pop("auto")
     estimating = (EstimateOptions(options.pop("min_confidence"), options.pop("wall"),
                                   settings.max_input_pixels, settings.orientation, auto,
-                                  settings.lens_profile)
+                                  settings.lens_profile, settings.lens_from_lines)
                   if auto is not None else None)
     batch = plan_batch(inputs, outdir, recursive, sidecar, table, settings, extension,
                        estimating, view_kwargs=options)
@@ -629,6 +631,7 @@ def settings_from_options(outdir: Path | Location, options: dict[str, Any]
         orientation=options.pop("exif_orientation"),
         metadata=not options.pop("strip_metadata"),
         lens_profile=options.pop("lens_profile"),
+        lens_from_lines=options.pop("lens_from_lines"),
     )
     check_lens_profile(settings.lens_profile)
     return settings, extension
