@@ -155,7 +155,7 @@ def undistort_k1(pixels: np.ndarray, centre: tuple[float, float], fx: float, fy:
         good = (np.abs(radius * (1.0 + k1 * radius**2) - distorted) < 1e-7 * (1 + distorted)
                 ) & (1.0 + 3.0 * k1 * radius**2 > 0)
         factor = np.where(distorted > 0, radius / np.where(distorted > 0, distorted, 1.0), 1.0)
-    ideal = np.column_stack([centre[0] + fx * x * factor, centre[1] + fy * y * factor])
+        ideal = np.column_stack([centre[0] + fx * x * factor, centre[1] + fy * y * factor])
     ideal[~good] = np.nan
     return ideal
 
