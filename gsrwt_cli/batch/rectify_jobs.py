@@ -231,10 +231,12 @@ def _lens_from_lines(job: Job, values: dict[str, Any], orientation: int,
     from ..api.lens_lines import lens_from_lines  # only when asked for
 
     try:
-        camera = view_from_values(values, job.where, orientation).intrinsics
+        view = view_from_values(values, job.where, orientation)
     except RecordError as error:
         raise JobError(str(error)) from None
     image = read_image(job.source, max_input_pixels or DEFAULT_MAX_INPUT_PIXELS, orientation)
+    height, width = image.shape[:2]
+    camera = view.with_size(width, height).intrinsics  # (the principal point: the centre)
     found = lens_from_lines(image, camera)
     del image
     if not found.taken:

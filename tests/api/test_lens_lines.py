@@ -13,11 +13,6 @@ import cv2
 import numpy as np
 import pytest
 
-from tests.helpers.estimate_scenes import angle_between
-from tests.helpers.lens_renders import render_distorted_room
-from tests.helpers.paths import ROOT
-from tests.helpers.tables import read_table
-
 from gsrwt_cli.api.estimate import estimate_pose
 from gsrwt_cli.api.lens_lines import (
     MAX_K1_SIGMA,
@@ -26,6 +21,10 @@ from gsrwt_cli.api.lens_lines import (
     undistort_k1,
 )
 from gsrwt_cli.geometry.camera import Intrinsics
+from tests.helpers.estimate_scenes import angle_between
+from tests.helpers.lens_renders import render_distorted_room
+from tests.helpers.paths import ROOT
+from tests.helpers.tables import read_table
 
 #: The issue's figure: k1 within this of the truth (normalised, OpenCV's convention).
 K1_TOLERANCE = 0.02
