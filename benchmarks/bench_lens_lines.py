@@ -17,7 +17,6 @@ half, 51 photos with true orientations).
 from __future__ import annotations
 
 import argparse
-import math
 import sys
 import time
 from pathlib import Path
@@ -147,4 +146,3 @@ if __name__ == "__main__":
     warnings.simplefilter("ignore")
     with np.errstate(all="ignore"):
         main()
-    _ = math

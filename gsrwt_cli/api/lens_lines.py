@@ -43,6 +43,7 @@ straightened lines give, ``f1``: one radial term in pixels is the same lens when
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -310,9 +311,9 @@ def _gate(found: LinesLens) -> str | None:
     return None
 
 
-def _golden(cost: object, low: float, high: float, iterations: int = K1_ITERATIONS) -> float:
-    """The minimum of ``cost`` (a function of one number) within ``[low, high]``."""
-    assert callable(cost)
+def _golden(cost: Callable[[float], float], low: float, high: float,
+            iterations: int = K1_ITERATIONS) -> float:
+    """The minimum of ``cost`` within ``[low, high]`` (a golden-section search)."""
     ratio = (math.sqrt(5.0) - 1.0) / 2.0
     a, b = high - ratio * (high - low), low + ratio * (high - low)
     cost_a, cost_b = cost(a), cost(b)
