@@ -81,6 +81,9 @@ class EstimateOptions:
     mode: str = "lines"
     #: ``--lens-profile``: ``auto``, ``lensfun`` or ``off`` (:mod:`~gsrwt_cli.inputs.lensfun`).
     lens_profile: str = "auto"
+    #: ``--lens-from-lines``: k1 from the image's lines where no lens is given nor profiled
+    #: (:mod:`~gsrwt_cli.api.lens_lines`).
+    lens_from_lines: bool = False
 
     def __post_init__(self) -> None:
         if self.wall not in WALL_CHOICES:
@@ -122,8 +125,10 @@ def orientation_of(path: Path, options: EstimateOptions) -> int:
 def estimate_file(path: Path, values: Mapping[str, Any], where: str, options: EstimateOptions
                   ) -> tuple[PoseEstimate, Intrinsics | None, str, np.ndarray, dict[str, Any]]:
     """Read ``path`` and estimate its pose: the estimate, the camera it was given (None when
-    the focal length was estimated), the focal length's source, the decoded image and the
-    lens's columns (:func:`camera_for`)."""
+    the focal length was estimated; with ``--lens-from-lines``'s lens when taken), the focal
+    length's source, the decoded image and the lens's columns (:func:`camera_for`; with
+    ``--lens-from-lines`` where no lens is given, ``lens_source`` ``lines`` when the lens is
+    taken, and ``lines``: the :class:`~gsrwt_cli.api.lens_lines.LinesLens` found)."""
     orientation = orientation_of(path, options)
     camera, source, principal_point, lens = camera_for(path, values, where, orientation,
                                                        options.lens_profile)
@@ -133,8 +138,37 @@ def estimate_file(path: Path, values: Mapping[str, Any], where: str, options: Es
             (camera.width, camera.height) != (width, height)):
         raise ValueError(f"the parameters say {camera.width}x{camera.height} pixels but the "
                          f"image is {width}x{height}")
+    if options.lens_from_lines and lens["lens_source"] == "none":
+        from ..api.lens_lines import estimate_with_lens_from_lines  # only when asked for
+
+        estimate, found = estimate_with_lens_from_lines(
+            image, camera, principal_point=principal_point, wall=options.wall)
+        lens = {**lens, "lines": found}
+        if found.taken:
+            lens["lens_source"] = "lines"
+            if camera is not None:
+                camera = Intrinsics(camera.fx, camera.fy, camera.cx, camera.cy, camera.skew,
+                                    camera.width, camera.height, found.lens())
+        return estimate, camera, source, image, lens
     estimate = estimate_pose(image, camera, principal_point=principal_point, wall=options.wall)
     return estimate, camera, source, image, lens
+
+
+def lens_columns(lens: Mapping[str, Any], camera: Intrinsics | None) -> dict[str, Any]:
+    """``gsrwt estimate --lens-from-lines``'s lens columns: ``lens_source``, the lens taken
+    (``distortion_model``, ``k1``: what ``rectify --sidecar`` reads back) and ``lens_lines``,
+    the evidence or why it was refused. ``camera``: the estimate's camera (a given lens's
+    coefficients are the sidecar's or the calibration file's: not repeated)."""
+    found = lens.get("lines")
+    row: dict[str, Any] = {"lens_source": lens["lens_source"]}
+    if found is not None:
+        row["lens_lines"] = found.summary()
+        if found.taken:
+            row.update(distortion_model="plumb_bob", k1=round(found.k1, 6))
+    elif lens["lens_source"] == "lensfun" and camera is not None and camera.lens is not None:
+        row["distortion_model"] = camera.lens.model
+        row.update(camera.lens.coefficients)
+    return row
 
 
 def checked(estimate: PoseEstimate, options: EstimateOptions) -> None:
@@ -283,6 +317,11 @@ def estimated_view_values(path: Path, values: Mapping[str, Any], where: str,
     if lens["lens_source"] == "lensfun" and camera is not None:  # the profile estimated with
         merged["distortion_model"] = camera.lens.model
         merged.update(camera.lens.coefficients)
+    found = lens.pop("lines", None)
+    if found is not None:  # --lens-from-lines: the lens taken, or why not
+        if found.taken:
+            merged.update(distortion_model="plumb_bob", k1=found.k1)
+        lens["lens_profile"] = found.summary()
     return merged, source, round(estimate.confidence, 4), lens
 
 
@@ -323,9 +362,11 @@ def process_estimate(job: EstimateJob, options: EstimateOptions,
                 row.update(guided_row(job.source, values, job.where,
                                       orientation_of(job.source, options)), status="ok")
                 return row
-            estimate, camera, source, image, _ = estimate_file(job.source, job.values,
-                                                               job.where, options)
+            estimate, camera, source, image, lens = estimate_file(job.source, job.values,
+                                                                  job.where, options)
             row.update(estimate_row(estimate, source))
+            if options.lens_from_lines:
+                row.update(lens_columns(lens, camera))
             height, width = image.shape[:2]
             principal_point = None
             if camera is None:

@@ -28,6 +28,7 @@ from ..geometry.camera import View
 from ..geometry.framing import Plan
 from ..geometry.orientation import displayed_size
 from ..imaging.images import (
+    DEFAULT_MAX_INPUT_PIXELS,
     Scratch,
     Working,
     canonical_extension,
@@ -35,6 +36,7 @@ from ..imaging.images import (
     file_orientation,
     image_file_size,
     measure_image_file,
+    read_image,
 )
 from ..inputs.focal import exif_head, with_focal
 from ..inputs.guides import parse_corners
@@ -152,14 +154,19 @@ def _orientation_cell(orientation: int | None) -> str:
 
 
 def _view(job: Job, estimate: bool = True, orientation: int | None = None,
-          lens_profile: str = "auto") -> tuple[View, str, dict[str, Any], str | None]:
+          lens_profile: str = "auto", lens_from_lines: bool = False,
+          max_input_pixels: float | None = None
+          ) -> tuple[View, str, dict[str, Any], str | None]:
     """The job's view, where its focal length came from (EXIF read here if needed), its
     ``pose_source``, ``confidence``, ``aspect`` and ``aspect_source`` columns, and the
     corners of a rectangle its pose was found from (``--corners``, or those of a document
     found by ``--auto document``; None without). An estimated pose is estimated here
     (unless not ``estimate``: then it is an error). ``orientation``: the image's EXIF
     orientation, applied (the view of the displayed photo; None or 1: of the stored
-    pixels). ``lens_profile``: ``--lens-profile``'s mode (:mod:`~gsrwt_cli.inputs.lensfun`)."""
+    pixels). ``lens_profile``: ``--lens-profile``'s mode (:mod:`~gsrwt_cli.inputs.lensfun`).
+    ``lens_from_lines``: a given pose's image without a lens gets k1 from its lines when they
+    give it (:func:`_lens_from_lines`; an estimated pose's comes with the estimate); the
+    image is then decoded here (at most ``max_input_pixels``)."""
     if job.error is not None:
         raise JobError(job.error)
     assert job.values is not None
@@ -188,6 +195,9 @@ def _view(job: Job, estimate: bool = True, orientation: int | None = None,
     values, lens_source, profile = with_lens_profile(
         head, image_file_size(job.source) if head is not None else None, values, lens_profile)
     guided = guides_give_pose(values)
+    if lens_from_lines and lens_source == "none" and source is not None and not guided:
+        values, lens_source, profile = _lens_from_lines(job, values, orientation or 1,
+                                                        max_input_pixels)
     if source is None and not guided:
         raise JobError(
             "no focal length: none in the parameters, no camera file, and no usable "
@@ -212,6 +222,29 @@ def _view(job: Job, estimate: bool = True, orientation: int | None = None,
         raise JobError(str(error)) from None
 
 
+def _lens_from_lines(job: Job, values: dict[str, Any], orientation: int,
+                     max_input_pixels: float | None) -> tuple[dict[str, Any], str, str]:
+    """``values`` (a pose given, no lens) with the k1 the image's lines give
+    (:func:`~gsrwt_cli.api.lens_lines.lens_from_lines`) when the gate takes it; the
+    ``lens_source`` (``lines`` or ``none``) and the ``lens_profile`` cell: the evidence, or
+    why the lens was refused."""
+    from ..api.lens_lines import lens_from_lines  # only when asked for
+
+    try:
+        view = view_from_values(values, job.where, orientation)
+    except RecordError as error:
+        raise JobError(str(error)) from None
+    image = read_image(job.source, max_input_pixels or DEFAULT_MAX_INPUT_PIXELS, orientation)
+    height, width = image.shape[:2]
+    camera = view.with_size(width, height).intrinsics  # (the principal point: the centre)
+    found = lens_from_lines(image, camera)
+    del image
+    if not found.taken:
+        return values, "none", found.summary()
+    return ({**values, "distortion_model": "plumb_bob", "k1": found.k1}, "lines",
+            found.summary())
+
+
 def _geometry(info: Plan) -> dict[str, Any]:
     return plan_row(info)
 
@@ -225,7 +258,7 @@ def _made_with(job: Job, settings: Settings) -> str | None:
                      job.output.suffix)
 
 
-def _lens_change(job: Job, mode: str) -> str | None:
+def _lens_change(job: Job, mode: str, lens_from_lines: bool = False) -> str | None:
     """How the lens this run gives a recorded job differs from its record's (``lens_source
     none -> lensfun``), or None: a lens profile is found in the image's EXIF, not in the
     values ``made_with`` records, so a rerun looks it up again (the EXIF read only where
@@ -233,6 +266,8 @@ def _lens_change(job: Job, mode: str) -> str | None:
     assert job.record is not None
     if job.values is None:
         return None
+    if lens_from_lines or job.record.get("lens_source") == "lines":
+        return None  # the lines' lens is the image's, with the flag ``made_with`` records
     recorded_source = job.record.get("lens_source") or None
     recorded = (recorded_source or "none", job.record.get("lens_profile") or "")
     if not needs_exif(job.values, mode):
@@ -360,7 +395,9 @@ def process_job(job: Job, settings: Settings, scratch: Scratch | None = None) ->
             warnings.simplefilter("ignore")
             orientation = _orientation(job, settings)
             view, source, pose, corners = _view(job, orientation=orientation,
-                                                lens_profile=settings.lens_profile)
+                                                lens_profile=settings.lens_profile,
+                                                lens_from_lines=settings.lens_from_lines,
+                                                max_input_pixels=settings.max_input_pixels)
             row.update(params_row(view, str(job.source)), focal_source=source, **pose,
                        orientation=_orientation_cell(orientation))
             if checking and not is_regular_file(job.output):
@@ -609,7 +646,7 @@ def run_batch(
         if job.record is None:
             return process_job(job, settings)
         change = (differences(job.record["made_with"], _made_with(job, settings) or "")
-                  or _lens_change(job, settings.lens_profile))
+                  or _lens_change(job, settings.lens_profile, settings.lens_from_lines))
         if change is None:
             return {**job.record, "status": "skipped", "error": None}
         error = f"its output exists from a run with other options ({change}); use " \

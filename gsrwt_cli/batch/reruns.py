@@ -151,6 +151,8 @@ def made_with(values: Mapping[str, Any] | None, wall: str | None, settings: Sett
         words.append(("metadata", "strip"))
     if settings.lens_profile == "off":  # auto and lensfun make the same files
         words.append(("lens_profile", "off"))
+    if settings.lens_from_lines:  # the default left out, likewise
+        words.append(("lens_from_lines", "on"))
     if suffix.lower() in LOSSY:
         words.append(("quality", str(settings.quality)))
     return " ".join(f"{name}={value}" for name, value in words)

@@ -34,6 +34,8 @@ class Settings:
     metadata: bool = True
     #: ``--lens-profile``: ``auto``, ``lensfun`` or ``off`` (:mod:`~gsrwt_cli.inputs.lensfun`).
     lens_profile: str = "auto"
+    #: ``--lens-from-lines``: k1 from the image's lines where no lens is given nor profiled.
+    lens_from_lines: bool = False
     root: Path | Location | None = None  # the output directory: nothing is written outside it
     #: Words an error in the caller's terms (a picklable callable: it goes to workers).
     describe: Describe | None = None

@@ -19,7 +19,7 @@ from ..inputs.records import load_camera_file
 from ..inputs.sidecar import SidecarError, display_path
 from ..io.storage import location
 from ..io.targets import Drawings, file_identity, protected_files
-from ..tables.columns import ESTIMATE_COLUMNS
+from ..tables.columns import estimate_columns
 from ..tables.writer import FORMATS, TableWriter, YamlRecordWriter, format_from_extension
 from .options import (
     VIEW_OPTIONS,
@@ -32,6 +32,7 @@ from .options import (
     field_options,
     guide_options,
     jobs_option,
+    lens_from_lines_option,
     lens_profile_option,
     load_sidecar_option,
     make_output_directory,
@@ -102,6 +103,7 @@ camera_options = field_options(
 @max_input_pixels_option
 @orientation_option
 @lens_profile_option
+@lens_from_lines_option
 @jobs_option
 @frames_option
 @quiet_option("No summary on stderr.")
@@ -109,6 +111,7 @@ def estimate(inputs: tuple[str, ...], output: str | None, fmt: str | None, recur
              sidecar: Path | None, auto: str, min_confidence: float, wall: str,
              draw: Path | None,
              max_input_pixels: str, exif_orientation: str, lens_profile: str,
+             lens_from_lines: bool,
              jobs: int | None, frame_range: tuple[int, int | None, int] | None,
              quiet: bool, **camera: Any) -> None:
     """Estimate pan, tilt and roll of each image from its straight lines (thesis future work 1).
@@ -116,9 +119,12 @@ def estimate(inputs: tuple[str, ...], output: str | None, fmt: str | None, recur
     Writes one sidecar row per image: image, pan, tilt, roll, focal, cx, cy, width,
     height (what 'gsrwt rectify --sidecar' reads), then confidence, segments, inliers,
     focal_source, aspect and aspect_source, the three vanishing points in pixels, status and
-    error. Images that cannot tell their pose get status error and no pose. With guides
-    (--corners, --verticals, --horizontals) the pose is the one they show. A video as the
-    only INPUT gives a row per frame (frame, time in front). Exit code 1 if any failed.
+    error. With --lens-from-lines also lens_source, distortion_model and k1 (the lens the
+    lines gave, which 'rectify --sidecar' reads back) and lens_lines (the evidence, or why
+    the lens was refused). Images that cannot tell their pose get status error and no
+    pose. With guides (--corners, --verticals, --horizontals) the pose is the one they
+    show. A video as the only INPUT gives a row per frame (frame, time in front). Exit
+    code 1 if any failed.
 
     \b
     Examples:
@@ -145,6 +151,8 @@ def estimate(inputs: tuple[str, ...], output: str | None, fmt: str | None, recur
         from .sequences import estimate_video
 
         check_lens_profile(lens_profile)
+        if lens_from_lines:
+            raise click.UsageError(f"{video}: --lens-from-lines does not apply to a video yet")
         estimate_video(video, output, table_format, EstimateOptions(
             min_confidence, wall, input_pixel_limit, exif_orientation, auto, lens_profile),
             view_defaults(camera), quiet, jobs, frame_range)
@@ -190,7 +198,7 @@ def estimate(inputs: tuple[str, ...], output: str | None, fmt: str | None, recur
                                     values, where, picture, error))
     check_lens_profile(lens_profile)
     options = EstimateOptions(min_confidence, wall, input_pixel_limit, exif_orientation, auto,
-                              lens_profile)
+                              lens_profile, lens_from_lines)
     for problem in unreadable:
         report_error(problem)
     counts = {"ok": 0, "failed": len(unreadable), "interrupted": 0}
@@ -200,8 +208,9 @@ def estimate(inputs: tuple[str, ...], output: str | None, fmt: str | None, recur
                     disable=quiet or not sys.stderr.isatty())
     with stop_on_signals(), open_table(output) as stream:
         writer: TableWriter | YamlRecordWriter = (
-            YamlRecordWriter(stream, ESTIMATE_COLUMNS) if table_format == "yaml"
-            else TableWriter(stream, ESTIMATE_COLUMNS, table_format))
+            YamlRecordWriter(stream, estimate_columns(lens_from_lines))
+            if table_format == "yaml"
+            else TableWriter(stream, estimate_columns(lens_from_lines), table_format))
 
         def on_row(row: dict[str, Any]) -> None:
             writer.write_row(row)

@@ -397,6 +397,18 @@ def lens_profile_option(func: F) -> F:
                              "pinhole.")(func)
 
 
+def lens_from_lines_option(func: F) -> F:
+    """``--lens-from-lines``: k1 from the image's straight lines (:mod:`~gsrwt_cli.api.
+    lens_lines`), for photos whose lens nothing else gives."""
+    return click.option("--lens-from-lines", is_flag=True,
+                        help="Estimate radial distortion (k1, OpenCV's plumb_bob) from the "
+                             "image's long straight lines, with the pose, for wide angles "
+                             "without a calibration: taken only when the lines pin it down "
+                             "and straightening them clearly helps, else a pinhole, the "
+                             "table saying why. A calibration file, lens columns or a "
+                             "lensfun profile take precedence.")(func)
+
+
 def check_lens_profile(mode: str) -> None:
     """Refuse ``--lens-profile lensfun`` without the extra, as a usage error."""
     from ..inputs.lensfun import lensfun_installed

@@ -96,6 +96,7 @@ from .options import (
     guide_options,
     interpolation_option,
     jobs_option,
+    lens_from_lines_option,
     lens_profile_option,
     load_sidecar_option,
     max_input_pixels_option,
@@ -433,6 +434,7 @@ def dask_executor(address: str, processes: int, retries: int,
 @max_input_pixels_option
 @orientation_option
 @lens_profile_option
+@lens_from_lines_option
 @interpolation_option
 @click.option("--fill", type=Number(), default=0.0, show_default=True,
               help="Value of pixels with no source, in the image's units (0-255, 0-65535).")
@@ -566,6 +568,9 @@ def rectify(inputs: tuple[str, ...], outdir: Path | Location, recursive: bool,
 
         _check_stream_options(inputs, sidecar, recursive, run, options, steady)
         settings, _ = settings_from_options(outdir, options)
+        if settings.lens_from_lines:
+            raise click.UsageError(f"{inputs[0]}: --lens-from-lines does not apply to a video "
+                                   "or bag yet")
         table_path = options.pop("table_path")
         table = table_from_options(outdir, table_path, None)
         for name in ("auto", "min_confidence", "wall", "shard"):
@@ -588,6 +593,9 @@ def rectify(inputs: tuple[str, ...], outdir: Path | Location, recursive: bool,
             raise click.UsageError("--smooth smooths poses estimated with --auto; a pose "
                                    "file's are used as they are")
         settings, _ = settings_from_options(outdir, options)
+        if settings.lens_from_lines:
+            raise click.UsageError(f"{inputs[0]}: --lens-from-lines does not apply to a video "
+                                   "or bag yet")
         table_path = options.pop("table_path")
         table = table_from_options(outdir, table_path, None)
         auto, min_confidence, wall = (options.pop(name) for name in ("auto", "min_confidence",
@@ -612,7 +620,7 @@ def rectify(inputs: tuple[str, ...], outdir: Path | Location, recursive: bool,
     auto = options.pop("auto")
     estimating = (EstimateOptions(options.pop("min_confidence"), options.pop("wall"),
                                   settings.max_input_pixels, settings.orientation, auto,
-                                  settings.lens_profile)
+                                  settings.lens_profile, settings.lens_from_lines)
                   if auto is not None else None)
     batch = plan_batch(inputs, outdir, recursive, sidecar, table, settings, extension,
                        estimating, view_kwargs=options)
@@ -709,6 +717,7 @@ def settings_from_options(outdir: Path | Location, options: dict[str, Any]
         orientation=options.pop("exif_orientation"),
         metadata=not options.pop("strip_metadata"),
         lens_profile=options.pop("lens_profile"),
+        lens_from_lines=options.pop("lens_from_lines"),
     )
     check_lens_profile(settings.lens_profile)
     return settings, extension

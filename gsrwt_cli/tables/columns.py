@@ -33,7 +33,8 @@ POSE_SOURCES = ("sidecar", "yaml", "options", "estimated")
 RECTIFY_STATUSES = ("ok", "skipped", "error", "interrupted", "planned")
 #: Where a rectify row's lens came from (``lens_source``): lens columns of a sidecar row, the
 #: YAML beside the image or the options, a calibration file, lensfun's database (its profile
-#: named in ``lens_profile``), the image's lines (``--lens-from-lines``, to come), or nowhere.
+#: named in ``lens_profile``), the image's lines (``--lens-from-lines``: its evidence, or why
+#: it was refused, in ``lens_profile``), or nowhere.
 LENS_SOURCES = ("camera", "sidecar", "lensfun", "lines", "none")
 #: A rectify row's ``orientation``: the EXIF orientation applied (1-8, 1 also for a photo
 #: without one), or ``ignored`` (``--orientation ignore``: the stored pixels).
@@ -57,6 +58,21 @@ ESTIMATE_COLUMNS = (
     *(f"vp_{name}_{axis}" for name in VANISHING_DIRECTIONS for axis in ("col", "row")),
     "status", "error",
 )
+
+#: ``gsrwt estimate --lens-from-lines`` adds these before ``status``: where the lens came from
+#: (:data:`LENS_SOURCES`), the lens the lines gave (``distortion_model``, ``k1``: a sidecar's
+#: lens columns, which ``rectify --sidecar`` reads back) and ``lens_lines``, their evidence or
+#: why they were refused. Without the flag the table is as before.
+ESTIMATE_LENS_COLUMNS = ("lens_source", "distortion_model", "k1", "lens_lines")
+
+
+def estimate_columns(lens_from_lines: bool = False) -> tuple[str, ...]:
+    """The columns of ``gsrwt estimate``'s table (:data:`ESTIMATE_COLUMNS`, with
+    :data:`ESTIMATE_LENS_COLUMNS` before ``status`` when the lens is estimated)."""
+    if not lens_from_lines:
+        return ESTIMATE_COLUMNS
+    return (*ESTIMATE_COLUMNS[:-2], *ESTIMATE_LENS_COLUMNS, *ESTIMATE_COLUMNS[-2:])
+
 
 #: ``gsrwt gaze`` and ``gsrwt track`` (thesis Sec. 5.2.2-5.2.3).
 GAZE_COLUMNS = ("pan_deg", "tilt_deg", "wall_x", "wall_y")

@@ -1,0 +1,95 @@
+"""``--lens-from-lines`` end to end (``gsrwt estimate`` and ``gsrwt rectify``, real
+subprocesses): the lens columns of the estimate, read back by ``rectify --sidecar -``,
+``lens_source lines`` with ``--auto`` and with a given pose, the refusal said in the table,
+what takes precedence, reruns, and tables without the flag as before."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import cv2
+import pytest
+
+from gsrwt_cli.tables.columns import ESTIMATE_COLUMNS
+from tests.helpers.cli import run_gsrwt
+from tests.helpers.lens_renders import render_distorted_room
+from tests.helpers.tables import read_table
+
+pytestmark = pytest.mark.slow
+
+
+@pytest.fixture(scope="module")
+def photos(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """``wide.png`` (k1 -0.3) and ``pinhole.png`` (k1 0), both 640x480 at focal 700."""
+    folder = tmp_path_factory.mktemp("lens-lines")
+    wide = render_distorted_room(15, -8, 3, k1=-0.3, focal=700, seed=0)
+    pinhole = render_distorted_room(20, -10, 2, k1=0.0, focal=700, seed=3)
+    cv2.imwrite(str(folder / "wide.png"), wide.image)
+    cv2.imwrite(str(folder / "pinhole.png"), pinhole.image)
+    return folder
+
+
+def test_estimate_writes_the_lens_and_rectify_reads_it_back(photos: Path, tmp_path: Path):
+    done = run_gsrwt("estimate", photos / "wide.png", photos / "pinhole.png", "--focal", "700",
+                     "--lens-from-lines", "-j", "1", "-f", "csv")
+    assert done.returncode == 0, done.stderr
+    rows = {row["image"]: row for row in read_table(done.stdout)}
+    wide, pinhole = rows["wide.png"], rows["pinhole.png"]
+    assert wide["lens_source"] == "lines" and wide["distortion_model"] == "plumb_bob"
+    assert abs(float(wide["k1"]) - (-0.3)) < 0.02
+    assert wide["lens_lines"].startswith("k1 ")
+    assert pinhole["lens_source"] == "none" and pinhole["k1"] in ("", None)
+    assert pinhole["lens_lines"].startswith("refused: ")
+    rectified = run_gsrwt("rectify", photos / "wide.png", photos / "pinhole.png",
+                          "--sidecar", "-", "-o", tmp_path / "out", "--table",
+                          tmp_path / "table.csv", "-j", "1", "-q", stdin=done.stdout)
+    assert rectified.returncode == 0, rectified.stderr
+    table = {Path(row["image"]).name: row for row in read_table(tmp_path / "table.csv")}
+    assert table["wide.png"]["lens_source"] == "sidecar"
+    assert table["pinhole.png"]["lens_source"] == "none"
+
+
+def test_estimate_without_the_flag_keeps_its_columns(photos: Path):
+    done = run_gsrwt("estimate", photos / "wide.png", "--focal", "700", "-j", "1", "-f",
+                     "csv")
+    assert done.returncode == 0, done.stderr
+    assert tuple(done.stdout.splitlines()[0].split(",")) == ESTIMATE_COLUMNS
+
+
+def test_rectify_auto_takes_the_lens_and_a_rerun_skips(photos: Path, tmp_path: Path):
+    inputs = ("rectify", photos / "wide.png", photos / "pinhole.png", "--auto", "--focal",
+              "700", "-o", tmp_path / "out", "-j", "1", "-q")
+    first = run_gsrwt(*inputs, "--lens-from-lines")
+    assert first.returncode == 0, first.stderr
+    rows = {Path(row["image"]).name: row for row in read_table(tmp_path / "out" / "gsrwt.csv")}
+    assert rows["wide.png"]["lens_source"] == "lines"
+    assert rows["wide.png"]["lens_profile"].startswith("k1 -0.29")
+    assert "lens_from_lines=on" in rows["wide.png"]["made_with"]
+    assert rows["pinhole.png"]["lens_source"] == "none"
+    assert rows["pinhole.png"]["lens_profile"].startswith("refused: ")
+    again = run_gsrwt(*inputs, "--lens-from-lines")
+    assert again.returncode == 0, again.stderr
+    assert {row["status"] for row in read_table(tmp_path / "out" / "gsrwt.csv")} == {
+        "skipped"}
+    without = run_gsrwt(*inputs)  # made with the flag: other options now
+    assert without.returncode == 1
+    assert "lens_from_lines" in without.stderr
+
+
+def test_rectify_with_a_given_pose_takes_the_lens(photos: Path, tmp_path: Path):
+    done = run_gsrwt("rectify", photos / "wide.png", "--pan", "15", "--tilt", "-8", "--roll",
+                     "3", "--focal", "700", "--lens-from-lines", "-o", tmp_path / "out",
+                     "--table", tmp_path / "table.csv", "-j", "1", "-q")
+    assert done.returncode == 0, done.stderr
+    row = read_table(tmp_path / "table.csv")[0]
+    assert row["lens_source"] == "lines" and row["status"] == "ok"
+
+
+def test_lens_columns_take_precedence(photos: Path, tmp_path: Path):
+    sidecar = tmp_path / "lens.csv"
+    sidecar.write_text("image,k1\nwide.png,0\n")
+    done = run_gsrwt("estimate", photos / "wide.png", "--focal", "700", "--sidecar", sidecar,
+                     "--lens-from-lines", "-j", "1", "-f", "csv")
+    assert done.returncode == 0, done.stderr
+    row = read_table(done.stdout)[0]
+    assert row["lens_source"] == "sidecar" and row["lens_lines"] in ("", None)
