@@ -567,6 +567,7 @@ def rectify(inputs: tuple[str, ...], outdir: Path | Location, recursive: bool,
         from .bags import rectify_bag  # bags only when given
 
         _check_stream_options(inputs, sidecar, recursive, run, options, steady)
+        _check_one_frame_size(options["bbox"], codec)
         settings, _ = settings_from_options(outdir, options)
         if settings.lens_from_lines:
             raise click.UsageError(f"{inputs[0]}: --lens-from-lines does not apply to a video "
@@ -589,6 +590,7 @@ def rectify(inputs: tuple[str, ...], outdir: Path | Location, recursive: bool,
         if steady and options["bbox"] != "frontal":
             raise click.UsageError("--steady keeps the first frame's default frame: it "
                                    "needs --bbox frontal")
+        _check_one_frame_size(options["bbox"], codec)
         if smooth and options["auto"] is None:
             raise click.UsageError("--smooth smooths poses estimated with --auto; a pose "
                                    "file's are used as they are")
@@ -650,6 +652,15 @@ def _check_stream_options(inputs: tuple[str, ...], sidecar: Any, recursive: bool
     if steady and options["bbox"] != "frontal":
         raise click.UsageError("--steady keeps the first frame's default frame: it "
                                "needs --bbox frontal")
+
+
+def _check_one_frame_size(bbox: str, codec: str) -> None:
+    """A usage error for a frame that gives every frame a size of its own (``full``,
+    ``crop``, ``corners``: their pose's) written into a video file, which has one size."""
+    if bbox in ("full", "crop", "corners") and codec in ("h264", "ffv1"):
+        raise click.UsageError(f"--bbox {bbox} gives every frame a size of its own, and a "
+                               f"{codec} video has one: use --codec png (an image sequence) "
+                               "or the default frame (--steady holds it still)")
 
 
 @dataclass(frozen=True)

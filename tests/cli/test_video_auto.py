@@ -86,6 +86,8 @@ def test_one_wall_for_the_whole_video_and_smoothing(tmp_path, room_video):
     (["--auto", "--poses", "poses.csv"], "use either --poses FILE or --auto"),
     (["--auto", "document"], "--auto document does not apply to a video"),
     (["--smooth", "1", "--poses", "poses.csv"], "--smooth smooths poses estimated with --auto"),
+    (["--auto", "--bbox", "full"], "--bbox full gives every frame a size of its own, and a "
+                                   "h264 video has one: use --codec png"),
 ])
 def test_usage_errors_are_one_line(tmp_path, room_video, arguments, message):
     (tmp_path / "poses.csv").write_text("time,pan,tilt\n0,1,2\n")
