@@ -510,7 +510,14 @@ def polish_focal(ideal: np.ndarray, centre: np.ndarray, focal: float, inlier_px:
     def cost(log_focal: float) -> float:
         return fitted[1](log_focal)[0]
 
-    low, high = math.log(focal / span), math.log(focal * span)
+    return math.exp(golden_minimum(cost, math.log(focal / span), math.log(focal * span),
+                                   iterations))
+
+
+def golden_minimum(cost: Callable[[float], float], low: float, high: float,
+                   iterations: int) -> float:
+    """Where ``cost`` is least within ``[low, high]``: a golden-section search of
+    ``iterations`` steps (each narrows the bracket to 0.618 of itself), its middle."""
     ratio = (math.sqrt(5.0) - 1.0) / 2.0
     a, b = high - ratio * (high - low), low + ratio * (high - low)
     cost_a, cost_b = cost(a), cost(b)
@@ -523,7 +530,7 @@ def polish_focal(ideal: np.ndarray, centre: np.ndarray, focal: float, inlier_px:
             low, a, cost_a = a, b, cost_b
             b = low + ratio * (high - low)
             cost_b = cost(b)
-    return math.exp((low + high) / 2.0)
+    return (low + high) / 2.0
 
 
 @dataclass(frozen=True)

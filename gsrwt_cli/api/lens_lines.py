@@ -43,7 +43,6 @@ straightened lines give, ``f1``: one radial term in pixels is the same lens when
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -62,6 +61,7 @@ from .estimate import (
     detect_segments,
     estimate_pose,
     fit_manhattan_frame,
+    golden_minimum,
     interpretation_planes,
 )
 
@@ -261,16 +261,16 @@ def lens_from_lines(image: np.ndarray, camera: Intrinsics, lines: np.ndarray | N
         return LinesLens(math.nan, math.inf, focal, int((labels >= 0).sum()),
                          reason=f"too few segments meet in the scene's directions: "
                                 f"{int((labels >= 0).sum())} (need {MIN_LENS_SEGMENTS})")
-    k1 = _golden(lambda k: search.cost(k, start, labels)[0], K1_GRID[best] - K1_SPAN,
-                 K1_GRID[best] + K1_SPAN)
+    k1 = golden_minimum(lambda k: search.cost(k, start, labels)[0], K1_GRID[best] - K1_SPAN,
+                        K1_GRID[best] + K1_SPAN, K1_ITERATIONS)
     # the inliers again at the found k1, and the search polished once with them
     _, directions, _ = search.cost(k1, start, labels)
     ideal, scale = search.ideal(k1)
     distance = search.distances(ideal, scale, directions)
     nearest = distance.min(axis=1)
     labels = np.where(nearest < inlier_px, distance.argmin(axis=1), -1)
-    k1 = _golden(lambda k: search.cost(k, directions, labels)[0], k1 - K1_SPAN / 3,
-                 k1 + K1_SPAN / 3)
+    k1 = golden_minimum(lambda k: search.cost(k, directions, labels)[0], k1 - K1_SPAN / 3,
+                        k1 + K1_SPAN / 3, K1_ITERATIONS)
     sigma = _k1_sigma(search, k1, directions, labels)
     residual_after = float(np.median(search.cost(k1, directions, labels)[2]))
     residual_before = float(np.median(search.cost(0.0, directions, labels)[2]))
@@ -309,24 +309,6 @@ def _gate(found: LinesLens) -> str | None:
         return (f"too little to matter: k1 {found.k1:+.4f} moves the corners "
                 f"{found.shift_px:.2f} px")
     return None
-
-
-def _golden(cost: Callable[[float], float], low: float, high: float,
-            iterations: int = K1_ITERATIONS) -> float:
-    """The minimum of ``cost`` within ``[low, high]`` (a golden-section search)."""
-    ratio = (math.sqrt(5.0) - 1.0) / 2.0
-    a, b = high - ratio * (high - low), low + ratio * (high - low)
-    cost_a, cost_b = cost(a), cost(b)
-    for _ in range(iterations):
-        if cost_a < cost_b:
-            high, b, cost_b = b, a, cost_a
-            a = high - ratio * (high - low)
-            cost_a = cost(a)
-        else:
-            low, a, cost_a = a, b, cost_b
-            b = low + ratio * (high - low)
-            cost_b = cost(b)
-    return (low + high) / 2.0
 
 
 def _k1_sigma(search: _Search, k1: float, directions: np.ndarray, labels: np.ndarray) -> float:

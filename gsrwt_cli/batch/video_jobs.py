@@ -52,6 +52,7 @@ from ..inputs.records import RecordError, view_from_values
 from ..io.outputs import (
     TEMPORARY_PATTERN,
     open_atomic,
+    process_alive,
     remove_stale_temporaries,
     temporary_target,
     write_atomic,
@@ -655,18 +656,6 @@ def _remove_stale_directories(directory: Path, name: str) -> None:
         match = TEMPORARY_PATTERN.match(entry.name)
         if match is None or temporary_target(entry.name) != name:
             continue
-        if not entry.is_dir(follow_symlinks=False) or _alive(int(match.group(1))):
+        if not entry.is_dir(follow_symlinks=False) or process_alive(int(match.group(1))):
             continue
         shutil.rmtree(entry.path, ignore_errors=True)
-
-
-def _alive(pid: int) -> bool:
-    if pid == os.getpid():
-        return True
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    return True

@@ -161,7 +161,9 @@ def temporary_target(name: str) -> str:
     return name[1:].rsplit(".gsrwt-", 1)[0]
 
 
-def _process_alive(pid: int) -> bool:
+def process_alive(pid: int) -> bool:
+    """Whether a process ``pid`` (a temporary's writer) still runs: ours, or any that
+    answers signal 0 or is someone else's."""
     if pid == os.getpid():
         return True
     try:
@@ -198,7 +200,7 @@ def remove_stale_temporaries(
         pid = int(match.group(1))
         if names is not None and temporary_target(entry.name) not in names:
             continue
-        stale = pid in pids if pids is not None else not _process_alive(pid)
+        stale = pid in pids if pids is not None else not process_alive(pid)
         if stale and not entry.is_dir(follow_symlinks=False):
             with contextlib.suppress(FileNotFoundError):
                 os.unlink(entry.path)
