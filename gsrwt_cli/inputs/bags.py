@@ -328,11 +328,15 @@ def bag_topics(bag: str | Path) -> dict[str, str]:
 
 def is_bag_name(path: str | Path) -> bool:
     """Whether ``path`` names a bag: a ``.bag``, ``.mcap`` or ``.db3`` file, or a directory
-    holding a ROS 2 bag's ``metadata.yaml``."""
+    holding a ROS 2 bag's ``metadata.yaml`` (a directory that cannot be read is not known
+    to be one: it is left to the reading of directories to report)."""
     path = Path(path)
     if path.suffix.lower() in (".bag", ".mcap", ".db3"):
         return True
-    return path.is_dir() and (path / "metadata.yaml").is_file()
+    try:
+        return path.is_dir() and (path / "metadata.yaml").is_file()
+    except OSError:  # no permission to look inside
+        return False
 
 
 # --------------------------------------------------------------------------------------------
