@@ -1,7 +1,11 @@
 """Make docs/orientation.jpg: a photo stored as a phone stores it (the sensor's pixels, turned a
-quarter, with EXIF Orientation 6 saying how to display them), before and after `gsrwt rectify
---auto --bbox full`. Left: the pixels as stored (what a tool that ignores the tag works on);
-right: the output, upright, since gsrwt applies the tag as viewers do.
+quarter, with EXIF Orientation 6 saying how to display them), and three frames of `gsrwt
+rectify --auto` of it. Left: the pixels as stored (what a tool that ignores the tag works on);
+then the outputs, upright, since gsrwt applies the tag as viewers do: the default frame (the
+thesis's: the input's size at frontal resolution, centred where the optical axis meets the
+wall, which cuts the facade's top), `--bbox full` (the whole visible wall, at most twice the
+input's pixels) and `--bbox crop --crop-aspect original` (the largest rectangle of the
+photo's shape with no fill).
 
 The photo is OpenCV's `building.jpg` (`tests/data/facade/`), turned by this script and given
 the tag with Pillow (no phone photo with a known orientation is in the repository).
@@ -40,14 +44,19 @@ def main() -> None:
         exif = Image.Exif()
         exif[0x0112] = 6
         upright.transpose(Image.Transpose.ROTATE_90).save(phone, quality=92, exif=exif)
-        subprocess.run([sys.executable, "-m", "gsrwt_cli", "rectify", str(phone), "--auto",
-                        "--bbox", "full", "-o", str(work / "out"), "-q"], check=True)
+        frames = {"default": [], "full": ["--bbox", "full"],
+                  "crop": ["--bbox", "crop", "--crop-aspect", "original"]}
+        outputs = []
+        for name, options in frames.items():
+            subprocess.run([sys.executable, "-m", "gsrwt_cli", "rectify", str(phone), "--auto",
+                            *options, "-o", str(work / name), "-q"], check=True)
+            outputs.append(cv2.imread(str(work / name / "phone.jpg"),
+                                      cv2.IMREAD_COLOR | cv2.IMREAD_IGNORE_ORIENTATION))
         stored = cv2.imread(str(phone), cv2.IMREAD_COLOR | cv2.IMREAD_IGNORE_ORIENTATION)
-        rectified = cv2.imread(str(work / "out" / "phone.jpg"),
-                               cv2.IMREAD_COLOR | cv2.IMREAD_IGNORE_ORIENTATION)
     gap = np.full((HEIGHT, MARGIN, 3), 255, np.uint8)
-    cv2.imwrite(str(ROOT / "docs" / "orientation.jpg"),
-                np.hstack([scaled(stored), gap, scaled(rectified)]),
+    panels = [scaled(image) for image in (stored, *outputs)]
+    row = [part for panel in panels for part in (panel, gap)][:-1]
+    cv2.imwrite(str(ROOT / "docs" / "orientation.jpg"), np.hstack(row),
                 [cv2.IMWRITE_JPEG_QUALITY, 85])
 
 
