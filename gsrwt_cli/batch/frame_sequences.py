@@ -3,7 +3,7 @@
 values of its moment, and its canonical (frontal) view.
 
 Decoded once, in this process, one frame at a time
-(:class:`~gsrwt_cli.inputs.videos.VideoReader`): memory holds the frame being worked on,
+(:class:`~gsrwt_cli.batch.frame_sources.VideoSource`): memory holds the frame being worked on,
 never the video. Each frame's pose is the pose file's at its time (slerp:
 :class:`~gsrwt_cli.geometry.timeline.Timeline`), as ``gsrwt rectify VIDEO --poses`` finds it.
 A frame the decoder refuses, or without a pose within ``max_gap``, comes with its ``error``;
@@ -22,13 +22,12 @@ import numpy as np
 
 from ..api.rectify import rectify_image, view_for_image
 from ..geometry.camera import View
-from ..geometry.rotations import PoseError, pose_from_rotation
-from ..geometry.timeline import PoseGapError, Timeline
 from ..inputs.pose_log import PoseLog
-from ..inputs.records import RecordError, merge_values, view_from_values
-from ..inputs.videos import FrameFailure, VideoError, VideoReader
+from ..inputs.records import RecordError, view_from_values
 from ..vision.edges import pixels8
 from .canonical_views import CanonicalView
+from .frame_sources import CachedTimeline, LogPoses, SourceEndedError, VideoSource
+from .job_errors import JobError
 
 
 @dataclass(frozen=True)
@@ -59,21 +58,6 @@ class SequenceFrame:
         return view_for_image(view_from_values(values, self.where), width, height)
 
 
-def frame_values(poses: PoseLog, timeline: Timeline, moment: float, index: int,
-                 fallback: Mapping[str, Any]) -> tuple[dict[str, Any], str]:
-    """The view values at ``moment`` on the pose file's clock (its pose slerped, its numbers
-    interpolated, then its defaults, then ``fallback``: the options) and where they came
-    from; raises :class:`ValueError` (the pose file named) for a moment without a pose."""
-    where = f"{poses.path.name} at frame {index} ({moment:.6g} s)"
-    try:
-        at = timeline.at(moment)
-        pose = pose_from_rotation(at.rotation)
-    except (PoseGapError, PoseError) as error:
-        raise ValueError(f"{poses.path.name}: {error}") from None
-    own = {**at.numbers, "pan": pose.pan, "tilt": pose.tilt, "roll": pose.roll}
-    return merge_values(own, poses.defaults, fallback), where
-
-
 def sequence_frames(path: Path, poses: PoseLog | None = None, *, time_mode: str = "relative",
                     max_gap: float = 0.5, fallback: Mapping[str, Any] | None = None,
                     max_pixels: float = math.inf,
@@ -85,22 +69,27 @@ def sequence_frames(path: Path, poses: PoseLog | None = None, *, time_mode: str 
     (every frame the same view), else None. ``frames``: ``(start, stop, step)``, only the
     frames of that slice of indices (every frame is still decoded up to ``stop``, where
     decoding ends). Raises :class:`~gsrwt_cli.inputs.videos.VideoError` when the file is no
-    video at all."""
+    video at all.
+
+    The frames and their poses are ``rectify VIDEO``'s own
+    (:class:`~.frame_sources.VideoSource`, :class:`~.frame_sources.LogPoses`)."""
     start, stop, step = frames or (0, None, 1)
     fallback = dict(fallback or {})
     fixed = None
     if poses is None and {"pan", "tilt", "roll"} & set(fallback):
         fixed = fallback
-    timeline = poses.timeline(max_gap) if poses is not None else None
-    with VideoReader(path, max_pixels) as reader:
-        frames = reader.frames()
+    looked_up = (CachedTimeline(LogPoses(poses, time_mode, max_gap, fallback, {}))
+                 if poses is not None else None)
+    source = VideoSource(path, max_pixels)
+    try:
+        stream = source.frames()
         count = 0
         while True:
             try:
-                item = next(frames)
+                item = next(stream)
             except StopIteration:
                 return
-            except VideoError as error:
+            except SourceEndedError as error:
                 yield SequenceFrame(count, None, error=str(error), end=True)
                 return
             count = item.index + 1
@@ -108,19 +97,20 @@ def sequence_frames(path: Path, poses: PoseLog | None = None, *, time_mode: str 
                 return
             if item.index < start or (item.index - start) % step:
                 continue
-            if isinstance(item, FrameFailure):
-                yield SequenceFrame(item.index, item.time, error=item.reason)
+            if item.pixels is None:
+                yield SequenceFrame(item.index, item.time, error=item.error)
                 continue
-            if poses is None or timeline is None:
+            if looked_up is None:
                 yield SequenceFrame(item.index, item.time, item.pixels, fixed, "options")
                 continue
-            moment = item.absolute if time_mode == "absolute" else item.time
             try:
-                values, where = frame_values(poses, timeline, moment, item.index, fallback)
-            except ValueError as error:
+                values, where, _ = looked_up.values_at(item)
+            except JobError as error:
                 yield SequenceFrame(item.index, item.time, error=str(error))
                 continue
             yield SequenceFrame(item.index, item.time, item.pixels, values, where)
+    finally:
+        source.close()
 
 
 def frame_canonical_view(video: Path, frame: SequenceFrame) -> CanonicalView:

@@ -15,8 +15,8 @@ a bag output gives it (a bag's frames keep their header stamps).
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Iterator, Mapping
-from dataclasses import dataclass, field
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass
 from fractions import Fraction
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Protocol
@@ -153,6 +153,10 @@ class BagSource:
 class FramePoses(Protocol):
     #: The table's ``pose_source`` of the frames (``poses``, ``bag``, ``estimated``).
     pose_source: str
+
+    def timeline(self) -> Timeline:
+        """The samples' timeline (built once per run: :class:`CachedTimeline`)."""
+        ...
     """Where each frame's pose comes from."""
 
     def values_at(self, frame: StreamFrame) -> tuple[dict[str, Any], str, str]:
@@ -161,7 +165,7 @@ class FramePoses(Protocol):
         ...
 
 
-def _focal_source(own: Mapping[str, Any], fallback: Mapping[str, Any],
+def focal_source_of(own: Mapping[str, Any], fallback: Mapping[str, Any],
                   camera: Mapping[str, Any]) -> str:
     """``poses`` (the pose file gives it), ``option``, or ``camera`` (a calibration file or
     the bag's camera_info)."""
@@ -172,7 +176,7 @@ def _focal_source(own: Mapping[str, Any], fallback: Mapping[str, Any],
     return "camera" if fallback.get("camera") or camera else "option"
 
 
-def _merged(own: dict[str, Any], defaults: Mapping[str, Any], fallback: Mapping[str, Any],
+def merged_values(own: dict[str, Any], defaults: Mapping[str, Any], fallback: Mapping[str, Any],
             camera: Mapping[str, Any]) -> dict[str, Any]:
     """The frame's values over the pose file's defaults, the options and, last, the bag's
     camera (whose focal length and principal point any other source replaces)."""
@@ -210,8 +214,8 @@ class LogPoses:
         except (PoseGapError, PoseError) as error:
             raise JobError(f"{name}: {error}") from None
         own = {**at.numbers, "pan": pose.pan, "tilt": pose.tilt, "roll": pose.roll}
-        values = _merged(own, self.log.defaults, self.fallback, self.camera)
-        return values, where, _focal_source({**at.numbers, **self.log.defaults},
+        values = merged_values(own, self.log.defaults, self.fallback, self.camera)
+        return values, where, focal_source_of({**at.numbers, **self.log.defaults},
                                             self.fallback, self.camera)
 
 
@@ -219,7 +223,7 @@ class CachedTimeline:
     """A :class:`FramePoses` with its timeline built once (the pose file's, the topic's, or
     the estimates')."""
 
-    def __init__(self, poses: LogPoses | TopicPoses | EstimatedPoses) -> None:
+    def __init__(self, poses: FramePoses) -> None:
         self.poses = poses
         self.pose_source = poses.pose_source
         self.timeline = poses.timeline()
@@ -271,87 +275,8 @@ class TopicPoses:
         except PoseError as error:
             raise JobError(f"{self.topic} at frame {frame.index}: {error}") from None
         own = {"pan": pose.pan, "tilt": pose.tilt, "roll": pose.roll}
-        values = _merged(own, {}, self.fallback, self.camera)
-        return values, where, _focal_source({}, self.fallback, self.camera)
-
-
-@dataclass
-class EstimatedPoses:
-    """Poses estimated from each frame's own lines (``rectify VIDEO --auto``): a first pass
-    over the video (``frames``: a fresh iterator of its frames, with pixels) estimates every
-    frame's pose with ``work`` (:class:`~gsrwt_cli.batch.sequence_workers.EstimateFrames`)
-    on ``processes`` workers; the estimates it accepts, all turned to one wall
-    (:func:`~gsrwt_cli.geometry.smoothing.one_wall`), are the samples of a timeline,
-    smoothed over ``smooth`` seconds when above 0 (:func:`~gsrwt_cli.geometry.smoothing.
-    smooth_samples`, weighted by their confidence). A frame whose own estimate was refused
-    takes the pose interpolated between the accepted ones around it, as a pose file's frame
-    between two samples, if one is within ``max_gap`` seconds; else it is an error row that
-    gives its own estimate's reason. ``fallback``: the view options (the focal length, if
-    given, is the estimates').
-
-    :meth:`timeline` runs the first pass; :attr:`confidence` and :attr:`refused` then hold
-    each frame's own estimate's confidence, or why it was refused, by frame index.
-    """
-
-    frames: Callable[[], Iterator[Any]]
-    work: Any
-    smooth: float
-    max_gap: float
-    fallback: Mapping[str, Any]
-    processes: int = 1
-    context: Any = None
-    camera: Mapping[str, Any] = field(default_factory=dict)
-    pose_source: str = "estimated"
-    confidence: dict[int, float] = field(default_factory=dict)
-    refused: dict[int, str] = field(default_factory=dict)
-
-    def timeline(self) -> Timeline:
-        from ..geometry.rotations import rotation_from_pose
-        from ..geometry.smoothing import one_wall, smooth_samples
-        from .sequence_workers import rows_in_order
-
-        accepted: list[tuple[float, float, float, float, dict[str, float]]] = []
-        for frame, rows in rows_in_order(self.frames(), self.work, self.processes,
-                                         self.context):
-            row = rows[0]
-            if getattr(frame, "end", False) or frame.time is None:
-                continue
-            if row.get("status") != "ok":
-                self.refused[frame.index] = str(row.get("error") or "no estimate")
-                continue
-            self.confidence[frame.index] = float(row["confidence"])
-            numbers = ({"focal": float(row["focal"])} if row.get("focal_source") == "estimated"
-                       and row.get("focal") not in (None, "") else {})
-            accepted.append((float(frame.time), float(row["pan"]), float(row["tilt"]),
-                             float(row["roll"]), numbers))
-        pans = one_wall([pan for _, pan, _, _, _ in accepted])
-        samples = [PoseSample(time, rotation_from_pose(pan, tilt, roll), numbers)
-                   for (time, _, tilt, roll, numbers), pan in zip(accepted, pans)]
-        weights = list(self.confidence.values())
-        if self.smooth > 0:
-            samples = smooth_samples(samples, self.smooth, weights)
-        return Timeline(samples, self.max_gap)
-
-    def values_at(self, frame: StreamFrame, timeline: Timeline | None = None
-                  ) -> tuple[dict[str, Any], str, str]:
-        timeline = timeline or self.timeline()
-        where = f"the estimate at frame {frame.index} ({frame.time:.6g} s)"
-        try:
-            at = timeline.at(float(frame.time))  # type: ignore[arg-type]
-            pose = pose_from_rotation(at.rotation)
-        except PoseGapError as error:
-            own = self.refused.get(frame.index, "no estimate")
-            nearest = ("no frame's estimate was accepted" if error.nearest is None else
-                       f"the nearest accepted estimate is {abs(error.time - error.nearest):.6g}"
-                       f" s away (--max-pose-gap {error.max_gap:g})")
-            raise JobError(f"{own}; {nearest}") from None
-        except PoseError as error:
-            raise JobError(f"frame {frame.index}: {error}") from None
-        own_values = {**at.numbers, "pan": pose.pan, "tilt": pose.tilt, "roll": pose.roll}
-        values = _merged(own_values, {}, self.fallback, self.camera)
-        source = "estimated" if "focal" in at.numbers else _focal_source({}, self.fallback,
-                                                                        self.camera)
-        return values, where, source
+        values = merged_values(own, {}, self.fallback, self.camera)
+        return values, where, focal_source_of({}, self.fallback, self.camera)
 
 
 class _OffsetTimeline(Timeline):

@@ -16,14 +16,18 @@ from __future__ import annotations
 import multiprocessing
 import warnings
 from collections.abc import Callable, Iterator, Mapping
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
 
+from ..geometry.rotations import PoseError, pose_from_rotation, rotation_from_pose
+from ..geometry.smoothing import one_wall, smooth_samples
+from ..geometry.timeline import PoseGapError, PoseSample, Timeline
 from .executor import ProcessExecutor
 from .frame_sequences import SequenceFrame
-from .job_errors import error_text
+from .frame_sources import StreamFrame, focal_source_of, merged_values
+from .job_errors import JobError, error_text
 from .workers import ProcessWorker
 
 Row = dict[str, Any]
@@ -133,3 +137,79 @@ class EstimateFrames:
             return [{**row, "status": "error", "error": str(error)}]
         row.update(estimated_values(estimate, camera, width, height, principal_point))
         return [{**row, "status": "ok"}]
+
+
+@dataclass
+class EstimatedPoses:
+    """Poses estimated from each frame's own lines (``rectify VIDEO --auto``): a first pass
+    over the video (``frames``: a fresh iterator of its frames, with pixels) estimates every
+    frame's pose with ``work`` (:class:`~gsrwt_cli.batch.sequence_workers.EstimateFrames`)
+    on ``processes`` workers; the estimates it accepts, all turned to one wall
+    (:func:`~gsrwt_cli.geometry.smoothing.one_wall`), are the samples of a timeline,
+    smoothed over ``smooth`` seconds when above 0 (:func:`~gsrwt_cli.geometry.smoothing.
+    smooth_samples`, weighted by their confidence). A frame whose own estimate was refused
+    takes the pose interpolated between the accepted ones around it, as a pose file's frame
+    between two samples, if one is within ``max_gap`` seconds; else it is an error row that
+    gives its own estimate's reason. ``fallback``: the view options (the focal length, if
+    given, is the estimates').
+
+    :meth:`timeline` runs the first pass; :attr:`confidence` and :attr:`refused` then hold
+    each frame's own estimate's confidence, or why it was refused, by frame index.
+    """
+
+    frames: Callable[[], Iterator[Any]]
+    work: Any
+    smooth: float
+    max_gap: float
+    fallback: Mapping[str, Any]
+    processes: int = 1
+    context: Any = None
+    camera: Mapping[str, Any] = field(default_factory=dict)
+    pose_source: str = "estimated"
+    confidence: dict[int, float] = field(default_factory=dict)
+    refused: dict[int, str] = field(default_factory=dict)
+
+    def timeline(self) -> Timeline:
+
+        accepted: list[tuple[float, float, float, float, dict[str, float]]] = []
+        for frame, rows in rows_in_order(self.frames(), self.work, self.processes,
+                                         self.context):
+            row = rows[0]
+            if getattr(frame, "end", False) or frame.time is None:
+                continue
+            if row.get("status") != "ok":
+                self.refused[frame.index] = str(row.get("error") or "no estimate")
+                continue
+            self.confidence[frame.index] = float(row["confidence"])
+            numbers = ({"focal": float(row["focal"])} if row.get("focal_source") == "estimated"
+                       and row.get("focal") not in (None, "") else {})
+            accepted.append((float(frame.time), float(row["pan"]), float(row["tilt"]),
+                             float(row["roll"]), numbers))
+        pans = one_wall([pan for _, pan, _, _, _ in accepted])
+        samples = [PoseSample(time, rotation_from_pose(pan, tilt, roll), numbers)
+                   for (time, _, tilt, roll, numbers), pan in zip(accepted, pans)]
+        weights = list(self.confidence.values())
+        if self.smooth > 0:
+            samples = smooth_samples(samples, self.smooth, weights)
+        return Timeline(samples, self.max_gap)
+
+    def values_at(self, frame: StreamFrame, timeline: Timeline | None = None
+                  ) -> tuple[dict[str, Any], str, str]:
+        timeline = timeline or self.timeline()
+        where = f"the estimate at frame {frame.index} ({frame.time:.6g} s)"
+        try:
+            at = timeline.at(float(frame.time))  # type: ignore[arg-type]
+            pose = pose_from_rotation(at.rotation)
+        except PoseGapError as error:
+            own = self.refused.get(frame.index, "no estimate")
+            nearest = ("no frame's estimate was accepted" if error.nearest is None else
+                       f"the nearest accepted estimate is {abs(error.time - error.nearest):.6g}"
+                       f" s away (--max-pose-gap {error.max_gap:g})")
+            raise JobError(f"{own}; {nearest}") from None
+        except PoseError as error:
+            raise JobError(f"frame {frame.index}: {error}") from None
+        own_values = {**at.numbers, "pan": pose.pan, "tilt": pose.tilt, "roll": pose.roll}
+        values = merged_values(own_values, {}, self.fallback, self.camera)
+        source = "estimated" if "focal" in at.numbers else focal_source_of({}, self.fallback,
+                                                                        self.camera)
+        return values, where, source

@@ -61,13 +61,10 @@ from ..tables.rows import params_row, plan_row
 from .executor import ProcessExecutor
 from .frame_sources import (
     CachedTimeline,
-    EstimatedPoses,
     FramePoses,
     FrameSource,
-    LogPoses,
     SourceEndedError,
     StreamFrame,
-    TopicPoses,
 )
 from .job_errors import JobError, error_text
 from .rectify_jobs import NOT_MADE_SO, Counts
@@ -98,7 +95,7 @@ class StreamJob:
     source: Path
     output: Path
     codec: str
-    poses: LogPoses | TopicPoses | EstimatedPoses
+    poses: FramePoses
     open_source: Callable[[], FrameSource]
     made_with: str = ""
     #: ``--steady``: every frame framed on the wall the first frame's default frame shows.

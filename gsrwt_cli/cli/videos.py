@@ -22,9 +22,10 @@ import click
 from tqdm import tqdm
 
 from ..base.messages import one_line, quote
-from ..batch.frame_sources import EstimatedPoses, LogPoses, VideoSource
+from ..batch.frame_sources import LogPoses, VideoSource
 from ..batch.rectify_jobs import Counts, Settings, worker_context
 from ..batch.reruns import made_with
+from ..batch.sequence_workers import EstimatedPoses
 from ..batch.video_jobs import StreamJob, output_of, remove_video_temporaries, run_stream
 from ..inputs.pose_log import PoseLog, load_pose_log
 from ..inputs.sidecar import SidecarError
