@@ -16,13 +16,17 @@ whatever else the machine runs; wall-clock times are printed too):
   in the DCT, 1/2, 1/4 or 1/8, as the map allows) and ``Scratch.warp`` (antialiased);
   goal: at most 0.6x ``decode``;
 - ``today``: the same without the reduced decode (a full decode, then the antialiased warp);
+- ``floor``: the least a preview made this way can cost: the reduced decode alone followed by
+  one bare ``cv2.warpPerspective`` of its pixels into reused memory (no file read, no checks,
+  no antialiasing, no fill beyond the horizon);
 - ``job``: the whole per-image work of ``gsrwt rectify`` with the preview (EXIF orientation,
   plan, decode, warp, encode as JPEG quality 95, write), for scale.
 
 Quality: both outputs against an area-averaged reference (the full decode warped to 8x the
 output's size, then averaged over 8x8 blocks, ``cv2.INTER_AREA``): the preview's PSNR must be
 at most 1 dB below today's (goal); their PSNR against each other is printed too (they differ
-in their filter: the DCT's box average against the warp's Gaussian pyramid, which blurs more).
+in their filter, the DCT's box average against the warp's Gaussian pyramid, and most in the
+pyramid levels' placement: docs/PERFORMANCE.md, "Previews").
 
     python benchmarks/bench_previews.py [--rounds 20]
 """
@@ -143,8 +147,16 @@ def main() -> None:
             def reduced(reduction=reduction) -> None:
                 decode_image(data, padded=True, into=buffer, reduction=reduction)
 
-            steps = {"decode": decode, "reduced": reduced, "preview": preview, "today": today,
-                     "job": whole_job}
+            homography = np.asarray(pixel_map.reduced(reduction).output_from_input)
+            warped = np.empty((*PREVIEW[::-1], 4), np.uint8)
+
+            def floor(reduction=reduction, homography=homography, warped=warped) -> None:
+                pixels = decode_image(data, padded=True, into=buffer, reduction=reduction)
+                cv2.warpPerspective(pixels, homography, PREVIEW, dst=warped,
+                                    flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT)
+
+            steps = {"decode": decode, "reduced": reduced, "floor": floor, "preview": preview,
+                     "today": today, "job": whole_job}
             best = dict.fromkeys(steps, math.inf)
             names = list(steps)
             wall = dict.fromkeys(steps, math.inf)
@@ -167,7 +179,8 @@ def main() -> None:
             print(f"pan {pan:+d} tilt {tilt:+d}: {info.size[0]}x{info.size[1]}, scale "
                   f"{info.frame.scale:.3f}, least shrink {shrink:.2f} -> decoded 1/{reduction}; "
                   f"full decode {best['decode'] * 1e3:.1f} ms, the 1/{reduction} decode alone "
-                  f"{best['reduced'] / best['decode']:.2f}x; preview "
+                  f"{best['reduced'] / best['decode']:.2f}x, with a bare warp (floor) "
+                  f"{best['floor'] / best['decode']:.2f}x; preview "
                   f"{best['preview'] * 1e3:.1f} ms = {ratio:.2f}x{goal}; today "
                   f"{best['today'] * 1e3:.1f} ms = {best['today'] / best['decode']:.2f}x; "
                   f"whole job {best['job'] * 1e3:.1f} ms = "

@@ -13,6 +13,7 @@ from __future__ import annotations
 import math
 from collections import OrderedDict
 from dataclasses import dataclass
+from functools import cached_property
 
 import cv2
 import numpy as np
@@ -119,7 +120,7 @@ class PixelMap:
         """``(N, 2)`` output pixels to input pixels."""
         if self.output_lens is not None:
             points = self.output_lens.undistort(np.asarray(points, dtype=np.float64))
-        ideal = map_points(np.linalg.inv(self.output_from_input), points)
+        ideal = map_points(self._input_from_output, points)
         return ideal if self.lens is None else self.lens.distort(ideal)
 
     def _output_lens_maps(self) -> tuple[np.ndarray, np.ndarray]:
@@ -129,12 +130,20 @@ class PixelMap:
         cols, rows = np.meshgrid(np.arange(width, dtype=np.float64),
                                  np.arange(height, dtype=np.float64))
         ideal = self.output_lens.undistort(np.column_stack([cols.ravel(), rows.ravel()]))
-        inverse = np.linalg.inv(self.output_from_input)
+        inverse = self._input_from_output
         sources = map_points(inverse, ideal)
         w = ideal @ inverse[2, :2] + inverse[2, 2]
         sources[~(w > 0) | ~np.all(np.isfinite(sources), axis=1)] = NO_SOURCE
         return (sources[:, 0].reshape(height, width).astype(np.float32),
                 sources[:, 1].reshape(height, width).astype(np.float32))
+
+    @cached_property
+    def _input_from_output(self) -> np.ndarray:
+        """``output_from_input``'s inverse (float64), computed once per map: the map's
+        checks and its antialiasing use it several times an image."""
+        inverse = np.linalg.inv(np.asarray(self.output_from_input, dtype=np.float64))
+        inverse.setflags(write=False)  # shared by every use
+        return inverse
 
     @property
     def _homography(self) -> np.ndarray:
@@ -155,7 +164,7 @@ class PixelMap:
         ``o ~ H p``, ``(H^-1 o)_3 = 1 / w(p)``), clipped to the output's rectangle.
         """
         width, height = self.size
-        line = np.linalg.inv(np.asarray(self.output_from_input, dtype=np.float64))[2]
+        line = self._input_from_output[2]
         corners = [(-0.5, -0.5), (width - 0.5, -0.5), (width - 0.5, height - 0.5),
                    (-0.5, height - 0.5)]
         polygon = _clip_to_half_plane(corners, line)
@@ -179,7 +188,7 @@ class PixelMap:
             rows = np.linspace(-0.5, height - 0.5, samples)
             outputs = np.stack(np.meshgrid(cols, rows), axis=-1).reshape(-1, 2)
             with np.errstate(all="ignore"):
-                inverse = np.linalg.inv(np.asarray(self.output_from_input, dtype=np.float64))
+                inverse = self._input_from_output
                 ideal = outputs if self.output_lens is None else self.output_lens.undistort(
                     outputs)
                 w = ideal @ inverse[2, :2] + inverse[2, 2]
@@ -188,7 +197,7 @@ class PixelMap:
                           & (inputs[:, 0] >= -0.5) & (inputs[:, 0] <= source_width - 0.5)
                           & (inputs[:, 1] >= -0.5) & (inputs[:, 1] <= source_height - 0.5))
             return bool(np.any(inside))
-        g = np.linalg.inv(np.asarray(self.output_from_input, dtype=np.float64))
+        g = self._input_from_output
         polygon: list[tuple[float, float]] = [
             (-0.5, -0.5), (width - 0.5, -0.5), (width - 0.5, height - 0.5),
             (-0.5, height - 0.5)]
@@ -236,7 +245,7 @@ class PixelMap:
         rows = np.arange(0, height + step - 1, step, dtype=np.float64).clip(max=height - 1)
         grid = np.stack(np.meshgrid(cols, rows), axis=-1).reshape(-1, 2)
         if self.lens is None:
-            values = local_stretch(np.linalg.inv(self.output_from_input), grid)
+            values = local_stretch(self._input_from_output, grid)
             sources = None
         else:  # finite differences of the warp's own maps (cached: it has just used them)
             maps = MAP_CACHE.get(self.lens, self._homography, self.size)
@@ -261,7 +270,7 @@ class PixelMap:
         """Which output points of ``grid`` have a source: in front of the horizon and inside
         an input of ``source_size``'s pixel edges grown by ``margin`` input pixels."""
         sources = self.to_input(grid) if sources is None else sources
-        inverse = np.linalg.inv(self.output_from_input)
+        inverse = self._input_from_output
         w = grid @ inverse[2, :2] + inverse[2, 2]
         with np.errstate(invalid="ignore"):
             inside = (w > 0) & np.all(np.isfinite(sources), axis=1)
@@ -350,8 +359,9 @@ class PixelMap:
         levels = min(int(math.ceil(level.max())), 8)
         # The input rectangle the region samples, with room for the pyramid's filters, at
         # offsets that are whole pixels of the coarsest level.
-        corners = np.array([[c, r] for c in np.linspace(0, x1 - x0 - 1, 17)
-                            for r in np.linspace(0, y1 - y0 - 1, 17)])
+        across, down = np.meshgrid(np.linspace(0, x1 - x0 - 1, 17),
+                                   np.linspace(0, y1 - y0 - 1, 17), indexing="ij")
+        corners = np.column_stack([across.ravel(), down.ravel()])
         sources = region.to_input(corners)
         sources = sources[np.all(np.isfinite(sources), axis=1)]
         if len(sources) == 0:

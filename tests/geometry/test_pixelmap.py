@@ -179,3 +179,19 @@ def test_the_least_shrink_is_the_least_of_every_pixel_that_samples_the_input():
         assert every.max() > 1.3 * truth or view.pan == 0  # a shrink that varies
     far_away = PixelMap(np.array([[0.5, 0, -5000], [0, 0.5, -5000], [0, 0, 1]]), (100, 100))
     assert far_away.least_shrink((WIDTH, HEIGHT)) == math.inf
+
+
+def test_a_maps_inverse_is_computed_once_and_cannot_be_changed():
+    """The inverse the map's checks and antialiasing share (computed once a map): the same
+    array at every use, equal to numpy's inverse of the map, and read-only, so that no use
+    can change what the next one sees."""
+    view = View(12.0, -7.0, FOCAL, width=WIDTH, height=HEIGHT)
+    pixel_map = plan_output(view, Framing(scale=0.5)).pixel_map
+    inverse = pixel_map._input_from_output
+    assert inverse is pixel_map._input_from_output
+    np.testing.assert_array_equal(inverse, np.linalg.inv(pixel_map.output_from_input))
+    with pytest.raises(ValueError, match="read-only"):
+        inverse[0, 0] = 1.0
+    points = np.array([[0.0, 0.0], [100.0, 50.0], [319.0, 239.0]])
+    np.testing.assert_allclose(pixel_map.to_output(pixel_map.to_input(points)), points,
+                               atol=1e-9)
