@@ -1,11 +1,11 @@
 """Make docs/orientation.jpg: a photo stored as a phone stores it (the sensor's pixels, turned a
 quarter, with EXIF Orientation 6 saying how to display them), and three frames of `gsrwt
 rectify --auto` of it. Left: the pixels as stored (what a tool that ignores the tag works on);
-then the outputs, upright, since gsrwt applies the tag as viewers do: the default frame (the
-thesis's: the input's size at frontal resolution, centred where the optical axis meets the
-wall, which cuts the facade's top), `--bbox full` (the whole visible wall, at most twice the
-input's pixels) and `--bbox crop --crop-aspect original` (the largest rectangle of the
-photo's shape with no fill).
+then the outputs, upright, since gsrwt applies the tag as viewers do: `--bbox frontal` (the
+thesis's frame: the input's size at frontal resolution, centred where the optical axis meets
+the wall, which cuts the facade's top), the default for a pose the photo gives (`full`: the
+whole visible wall, at most twice the input's pixels) and `--bbox crop --crop-aspect
+original` (the largest rectangle of the photo's shape with no fill).
 
 The photo is OpenCV's `building.jpg` (`tests/data/facade/`), turned by this script and given
 the tag with Pillow (no phone photo with a known orientation is in the repository).
@@ -44,7 +44,7 @@ def main() -> None:
         exif = Image.Exif()
         exif[0x0112] = 6
         upright.transpose(Image.Transpose.ROTATE_90).save(phone, quality=92, exif=exif)
-        frames = {"default": [], "full": ["--bbox", "full"],
+        frames = {"frontal": ["--bbox", "frontal"], "default": [],
                   "crop": ["--bbox", "crop", "--crop-aspect", "original"]}
         outputs = []
         for name, options in frames.items():

@@ -84,6 +84,13 @@ class Job:
     record: dict[str, Any] | None = None
 
 
+def pose_from_photo(job: Job) -> bool:
+    """Whether the job's pose comes from its photo: estimated (``--auto``) or shown by guides
+    (corners, verticals, horizontals) rather than given as numbers."""
+    return job.pose_source == "estimated" or (job.values is not None
+                                              and guides_give_pose(job.values))
+
+
 def plan_jobs(
     sources: Iterable[Source],
     outdir: Path | Location,
@@ -387,6 +394,7 @@ def process_job(job: Job, settings: Settings, scratch: Scratch | None = None) ->
     ``skipped`` if it is the very file these options make, else an error; never rewritten.
     """
     scratch = scratch or Scratch()
+    settings = settings.of_image(pose_from_photo(job))
     row: dict[str, Any] = {"image": str(job.source), "output": str(job.output)}
     checking = job.existed and not settings.overwrite and (  # gone since: made afresh
         os.path.lexists(job.output) if isinstance(job.output, Path) else job.output.exists())
@@ -450,6 +458,7 @@ def record_row(job: Job, settings: Settings, status: str = "ok") -> dict[str, An
     The geometry comes from the input's header size and these settings; if the existing
     output's size disagrees with it, ``error`` says so.
     """
+    settings = settings.of_image(pose_from_photo(job))
     row: dict[str, Any] = {"image": str(job.source), "output": str(job.output)}
     try:
         with np.errstate(all="ignore"):
@@ -596,7 +605,9 @@ def row_for_here(job: Job, row: dict[str, Any]) -> dict[str, Any]:
 def settings_for_elsewhere(settings: Settings) -> Settings:
     """The settings with an absolute output root (:func:`job_for_elsewhere`)."""
     root = None if settings.root is None else _absolute(settings.root)
-    return replace(settings, root=root)
+    from_photo = settings.from_photo
+    return replace(settings, root=root, from_photo=None if from_photo is None
+                   else replace(from_photo, root=root))
 
 
 def remove_temporaries_left(jobs: Iterable[Job]) -> None:
@@ -645,7 +656,8 @@ def run_batch(
         job = jobs[index]
         if job.record is None:
             return process_job(job, settings)
-        change = (differences(job.record["made_with"], _made_with(job, settings) or "")
+        change = (differences(job.record["made_with"],
+                              _made_with(job, settings.of_image(pose_from_photo(job))) or "")
                   or _lens_change(job, settings.lens_profile, settings.lens_from_lines))
         if change is None:
             return {**job.record, "status": "skipped", "error": None}

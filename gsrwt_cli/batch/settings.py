@@ -39,3 +39,12 @@ class Settings:
     root: Path | Location | None = None  # the output directory: nothing is written outside it
     #: Words an error in the caller's terms (a picklable callable: it goes to workers).
     describe: Describe | None = None
+    #: The settings of an image whose pose the photo itself gives (``--auto``, guides), where
+    #: they differ: without ``--bbox`` its frame is the whole wall it shows (``full``,
+    #: capped), while a given pose keeps the thesis's frame. None: these settings for all.
+    from_photo: Settings | None = None
+
+    def of_image(self, pose_from_photo: bool) -> Settings:
+        """The settings of one image: :attr:`from_photo` when its pose comes from the photo
+        and they are set, else these."""
+        return self.from_photo if pose_from_photo and self.from_photo is not None else self

@@ -18,7 +18,7 @@ import math
 import os
 import sys
 from collections.abc import Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path, PurePosixPath
 from typing import Any
 
@@ -321,7 +321,7 @@ class RectifyWording:
                 return ("no pixel of --bbox has a source in the image: the box lies where the "
                         "image does not see the wall; choose one within --bbox full's frame")
             if self.bbox == "frontal":
-                return ("no pixel of the default frame (--bbox frontal, around where the "
+                return ("no pixel of the frontal frame (--bbox frontal, around where the "
                         "optical axis meets the wall) has a source in the image; check the "
                         "pose and the principal point, or frame what it sees with --bbox "
                         "full")
@@ -407,11 +407,13 @@ def dask_executor(address: str, processes: int, retries: int,
                    "a path, a URL, or - for standard input.")
 @view_options
 @guide_options
-@click.option("--bbox", default="frontal", show_default=True,
+@click.option("--bbox", default=None,
               help="Output extent: frontal (the thesis's box, the input's size), full (the "
                    "visible wall, up to --max-stretch), crop (the largest rectangle of it with "
                    "no fill), corners (the rectangle of --corners, at a resolution that keeps "
-                   "its pixels) or X0,Y0,X1,Y1 in default-frame pixels.")
+                   "its pixels) or X0,Y0,X1,Y1 in frontal-frame pixels.  [default: full for a "
+                   "still photo whose pose the photo gives (--auto, guides), frontal for a pose "
+                   "given and for videos and bags]")
 @click.option("--margin", type=Number(min=0), default=0.0, show_default=True,
               help="With --bbox corners: room around the rectangle, in percent of its width "
                    "and height.")
@@ -563,6 +565,8 @@ def rectify(inputs: tuple[str, ...], outdir: Path | Location, recursive: bool,
     max_pose_gap, codec = options.pop("max_pose_gap"), options.pop("codec")
     steady, smooth = options.pop("steady"), options.pop("smooth")
     bag_options = BagOptions.pop_from(options)
+    photo_frame = options["bbox"] is None  # an image whose pose its photo gives: its own
+    options["bbox"] = options["bbox"] or "frontal"
     if bag_options.given() or any(is_bag_input(text) for text in inputs):
         from .bags import rectify_bag  # bags only when given
 
@@ -617,7 +621,7 @@ def rectify(inputs: tuple[str, ...], outdir: Path | Location, recursive: bool,
     if codec == "bag":
         raise click.UsageError("--codec bag writes a bag's rectified topic: INPUT must be a "
                                "bag, with --topic")
-    settings, extension = settings_from_options(outdir, options)
+    settings, extension = settings_from_options(outdir, options, photo_frame)
     table = table_from_options(outdir, options.pop("table_path"), options.pop("shard"))
     auto = options.pop("auto")
     estimating = (EstimateOptions(options.pop("min_confidence"), options.pop("wall"),
@@ -682,11 +686,12 @@ class RunOptions:
                    getattr(root, "fork_workers", False))
 
 
-def settings_from_options(outdir: Path | Location, options: dict[str, Any]
-                          ) -> tuple[Settings, str | None]:
+def settings_from_options(outdir: Path | Location, options: dict[str, Any],
+                          photo_frame: bool = False) -> tuple[Settings, str | None]:
     """The run's :class:`Settings` (framing, resampling, output format) and the output
     extension (``--ext``), from the options, which it takes out of ``options``; a bad value
-    is a usage error naming its option."""
+    is a usage error naming its option. ``photo_frame``: ``--bbox`` was not given, so an
+    image whose pose its photo gives is framed ``full`` (:attr:`Settings.from_photo`)."""
     bbox = parse_bbox(options.pop("bbox"))
     crop_aspect = parse_crop_aspect(options.pop("crop_aspect"), bbox)
     scale, px_per_unit = options.pop("scale"), options.pop("px_per_unit")
@@ -731,6 +736,10 @@ def settings_from_options(outdir: Path | Location, options: dict[str, Any]
         lens_from_lines=options.pop("lens_from_lines"),
     )
     check_lens_profile(settings.lens_profile)
+    if photo_frame:
+        settings = replace(settings, from_photo=replace(
+            settings, framing=replace(settings.framing, bbox="full"),
+            describe=replace(settings.describe, bbox="full")))
     return settings, extension
 
 

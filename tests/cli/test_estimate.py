@@ -116,11 +116,23 @@ def test_rectify_auto_estimates_what_no_source_gives(tmp_path):
     assert float(door["pan_deg"]) == pytest.approx(20, abs=0.2)
     assert rows["sign_p-25_t10_f1120.jpg"]["pose_source"] == "sidecar"
     assert rows["sign_p-25_t10_f1120.jpg"]["confidence"] == ""
+    # Without --bbox, the photo's own pose frames the whole wall it shows (capped at twice
+    # the input's pixels); the pose given keeps the thesis's frame, the input's size.
+    sign = rows["sign_p-25_t10_f1120.jpg"]
+    assert "bbox=frontal" in sign["made_with"] and "max_area" not in sign["made_with"]
+    assert (sign["out_width"], sign["out_height"]) == ("1280", "960")
+    assert "bbox=full" in door["made_with"] and "max_area=2" in door["made_with"]
+    door_pixels = int(door["out_width"]) * int(door["out_height"])
+    assert 1280 * 960 < door_pixels <= 2 * 1280 * 960
     known = tmp_path / "known"
     run_gsrwt("rectify", str(VIEWS / "door_p20_t-8_f800.jpg"), "--sidecar",
               str(VIEWS / "views.csv"), "-o", str(known), "-q")
+    framed = tmp_path / "framed"  # --bbox given: the estimated pose takes it
+    result = run_gsrwt("rectify", str(images / "door_p20_t-8_f800.jpg"), "--auto", "--focal",
+                       "800", "--bbox", "frontal", "-o", str(framed), "-q")
+    assert result.returncode == 0, result.stderr
     a = cv2.imread(str(known / "door_p20_t-8_f800.jpg")).astype(np.float64)
-    b = cv2.imread(str(tmp_path / "out" / "door_p20_t-8_f800.jpg")).astype(np.float64)
+    b = cv2.imread(str(framed / "door_p20_t-8_f800.jpg")).astype(np.float64)
     assert cv2.PSNR(a, b) >= 30
     result = run_gsrwt("rectify", str(images), "--focal", "800", "-o", str(tmp_path / "no"))
     assert result.returncode == 1  # without --auto, no pose is an error

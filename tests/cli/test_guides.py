@@ -93,6 +93,8 @@ def test_rectify_frames_the_rectangle_upright_from_options_and_from_estimate(pho
         [row] = rows((tmp_path / name / "gsrwt.csv").read_text())
         assert row["status"] == "ok" and row["focal_source"] == (
             "estimated" if name == "direct" else "sidecar")
+        # The corners' pose frames the whole wall; the pose the table gives, the thesis's box.
+        assert f"bbox={'full' if name == 'direct' else 'frontal'}" in row["made_with"].split()
         tl, tr, br, bl = rectified_corners(row, SHOT.corners)
         assert abs(tl[1] - tr[1]) < 0.5 and abs(bl[1] - br[1]) < 0.5
         assert abs(tl[0] - bl[0]) < 0.5 and abs(tr[0] - br[0]) < 0.5

@@ -197,7 +197,7 @@ def test_a_pixel_target_with_half_an_image_size_asks_for_the_other_half(tmp_path
         "Error: --to-pixel needs --height too (the image size), or --cx --cy")
 
 
-FRAMED_OUT = "no pixel of the default frame (--bbox frontal, around where the optical axis "
+FRAMED_OUT = "no pixel of the frontal frame (--bbox frontal, around where the optical axis "
 
 
 @pytest.mark.parametrize(("options", "message"), [
