@@ -18,9 +18,15 @@ line finds gets the first of these reasons that applies, in this order:
 - ``contrast bar`` / ``min length`` / ``fill`` / ``gap``: found when that one test of the
   Hough stage is relaxed (the contrast bar off; min length 10 px; no fill test; gaps of
   30 px joined);
+- ``near a parallel line``: a reported line lies within 6 px and 5 degrees of it;
 - ``other``: none of these.
 
-    python benchmarks/lines_misses.py [YORK_DIR] [--folds]
+It also sorts the reported lines that lie on no label (precision's losses): ``parallel``
+to a label (within 2 degrees) but 2 to 6 px off it over half their length, ``past a
+label's end`` (within 2 px of its line but less than half of them beside it), ``turned``
+(within 3 px over half their length but more than 2 degrees off), ``far`` from every label.
+
+    python benchmarks/lines_misses.py [YORK_DIR]
 """
 
 from __future__ import annotations
@@ -134,10 +140,43 @@ def _relaxed(view, edges, what: str) -> list:
          hough.HOUGH_SUPPRESSION_THETA_BINS) = saved
 
 
-def classify(view, labels: list[lines_measure.Label]) -> tuple[Counter, int, int]:
-    """Reasons of the misses of one frontal view; its long vertical labels and finds."""
+OFF_LABEL = ("parallel", "past a label's end", "turned", "far")
+
+
+def _off_label(line, labels: list[lines_measure.Label]) -> str | None:
+    """Why ``line`` lies on no label (:data:`OFF_LABEL`); None if it lies on one."""
+    if any(lines_measure.lies_on(line, label) for label in labels):
+        return None
+    start, end = lines_measure._ends(line)
+    length = float(np.hypot(*(end - start)))
+    reason = "far"
+    for label in labels:
+        overlap = lines_measure._overlap(start, end, label.start, label.end)
+        distance = lines_measure._distance_to_line(np.array([start, end]), label.start,
+                                                   label.end)
+        angle = lines_measure._angle_deg(end - start, label.end - label.start)
+        if angle <= lines_measure.PRECISION_ANGLE_DEG:
+            if np.all(distance <= lines_measure.DISTANCE_PX) and overlap > 0:
+                return "past a label's end"
+            if np.all(distance <= 6.0) and overlap >= 0.5 * length:
+                reason = "parallel"
+        elif np.all(distance <= 3.0) and overlap >= 0.5 * length and reason == "far":
+            reason = "turned"
+    return reason
+
+
+def classify(view, labels: list[lines_measure.Label]) -> tuple[Counter, int, int, Counter]:
+    """Reasons of the misses of one frontal view; its long vertical labels and finds; the
+    kinds of its lines that lie on no label (``("all" | "vertical", kind)``)."""
     edges = frontal_edges(grey8(view.pixels), view.pixel_map, view.source_size)
     lines = hough.hough_lines(view.pixels, edges=edges)
+    off: Counter = Counter()
+    for line in lines:
+        kind = _off_label(line, labels)
+        if kind is not None:
+            off["all", kind] += 1
+            if lines_measure.is_vertical(line):
+                off["vertical", kind] += 1
     vertical = [line for line in lines if lines_measure.is_vertical(line)]
     relaxed: dict[str, list] = {}
     reasons: Counter = Counter()
@@ -150,7 +189,7 @@ def classify(view, labels: list[lines_measure.Label]) -> tuple[Counter, int, int
             found += 1
             continue
         reasons[_reason(view, edges, lines, label, relaxed)] += 1
-    return reasons, total, found
+    return reasons, total, found, off
 
 
 def _reason(view, edges, lines, label, relaxed) -> str:
@@ -192,6 +231,7 @@ def main() -> None:
     cv2.setNumThreads(1)
     labels = lines_measure.read_labels(args.root)
     folds = [Counter(), Counter()]
+    off: Counter = Counter()
     counts = [[0, 0], [0, 0]]
     names = sorted(lines_measure.read_truth(args.root))
     with tempfile.TemporaryDirectory() as folder:
@@ -199,8 +239,9 @@ def main() -> None:
         for view in lines_measure.frontal_views(args.root, sidecar):
             fold = names.index(view.path.name) % 2
             shown = lines_measure.visible_labels(view, labels.get(view.path.name, []))
-            reasons, total, found = classify(view, shown)
+            reasons, total, found, lost = classify(view, shown)
             folds[fold].update(reasons)
+            off.update(lost)
             counts[fold][0] += total
             counts[fold][1] += found
     total = sum(c[0] for c in counts)
@@ -210,6 +251,10 @@ def main() -> None:
     for reason in REASONS:
         n = folds[0][reason] + folds[1][reason]
         print(f"{reason:20} {n:6} {n / total:7.3f} {folds[0][reason]:7} {folds[1][reason]:7}")
+    print("reported lines on no label, by kind:")
+    print(f"{'kind':20} {'all':>6} {'vertical':>9}")
+    for kind in OFF_LABEL:
+        print(f"{kind:20} {off['all', kind]:6} {off['vertical', kind]:9}")
 
 
 if __name__ == "__main__":
