@@ -16,7 +16,7 @@ from gsrwt_cli.geometry.framing import Framing, plan_output
 from gsrwt_cli.geometry.lens import Lens
 from gsrwt_cli.geometry.pixelmap import PixelMap
 from tests.helpers.camera import camera_axes
-from tests.helpers.images import smooth_texture
+from tests.helpers.images import phase_shift, smooth_texture
 
 DISTANCE = 10.0
 WIDTH, HEIGHT, FOCAL = 640, 480, 500.0
@@ -222,22 +222,6 @@ def opencv_render(view: View, texture: np.ndarray) -> np.ndarray:
     return cv2.remap(texture, map_x.reshape(view.height, view.width).astype(np.float32),
                      map_y.reshape(view.height, view.width).astype(np.float32),
                      cv2.INTER_LINEAR)
-
-
-def phase_shift(reference: np.ndarray, image: np.ndarray, border: int = 3) -> float:
-    """The larger component of ``image``'s shift against ``reference`` (output pixels) by
-    ``cv2.phaseCorrelate`` (Hann window), on an inner crop whose sides are even sizes the
-    DFT takes as they are (padded to an odd size, its peak is placed half a pixel off)."""
-    def side(length: int) -> int:
-        return max(n for n in range(2, length + 1, 2) if cv2.getOptimalDFTSize(n) == n)
-
-    height = side(reference.shape[0] - 2 * border)
-    width = side(reference.shape[1] - 2 * border)
-    crop = (slice(border, border + height), slice(border, border + width))
-    window = cv2.createHanningWindow((width, height), cv2.CV_64F)
-    (dx, dy), _ = cv2.phaseCorrelate(reference[crop].astype(np.float64),
-                                     image[crop].astype(np.float64), window)
-    return max(abs(dx), abs(dy))
 
 
 @pytest.mark.parametrize("name", [None, "plumb_bob"])
