@@ -25,8 +25,8 @@ whatever else the machine runs; wall-clock times are printed too):
 Quality: both outputs against an area-averaged reference (the full decode warped to 8x the
 output's size, then averaged over 8x8 blocks, ``cv2.INTER_AREA``): the preview's PSNR must be
 at most 1 dB below today's (goal); their PSNR against each other is printed too (they differ
-in their filter, the DCT's box average against the warp's Gaussian pyramid, and most in the
-pyramid levels' placement: docs/PERFORMANCE.md, "Previews").
+in their filter, the DCT's box average against the warp's Gaussian pyramid, which blurs more:
+docs/PERFORMANCE.md, "Previews").
 
     python benchmarks/bench_previews.py [--rounds 20]
 """

@@ -283,8 +283,9 @@ class PixelMap:
     def reduced(self, factor: int, offset: tuple[float, float] = (0.0, 0.0)) -> PixelMap:
         """This map onto the input reduced ``factor`` times, as libjpeg's scaled decoding
         reduces it: reduced pixel ``k`` is input pixels ``factor k .. factor (k + 1) - 1``,
-        so with pixel centres at integers ``x_reduced = (x + 0.5) / factor - 0.5`` (the
-        pyramid's convention, :meth:`_resample`), plus ``offset`` (reduced pixels, per axis:
+        so with pixel centres at integers ``x_reduced = (x + 0.5) / factor - 0.5`` (a box
+        average's centre; not the pyramid's, whose levels :meth:`_resample` centres on every
+        ``2^level``-th pixel of the reduced image), plus ``offset`` (reduced pixels, per axis:
         a reduced image mirrored along an axis whose length ``factor`` does not divide is
         shifted by the part of a pixel its last one lacks).
 
@@ -392,9 +393,14 @@ class PixelMap:
                   fill: tuple[float, ...], out: np.ndarray | None,
                   border: int = cv2.BORDER_CONSTANT,
                   offset: tuple[int, int] = (0, 0)) -> np.ndarray:
-        """One OpenCV pass from pyramid ``level`` of the input (``2^level`` pixels per pixel,
-        centres at ``(p + 0.5) / 2^level - 0.5``), or of the part of the input whose first
-        pixel is ``offset`` (column, row)."""
+        """One OpenCV pass from pyramid ``level`` of the input (``2^level`` pixels per pixel),
+        or of the part of the input whose first pixel is ``offset`` (column, row).
+
+        ``cv2.pyrDown`` filters with a 5-tap Gaussian centred on the even samples and keeps
+        those, so a level's pixel ``i`` is centred on pixel ``2^level i`` of the image it was
+        made from: ``x_level = (x - offset) / 2^level``, no half-pixel terms (unlike a box
+        average's ``(x + 0.5) / r - 0.5``, :meth:`reduced`; sampled that way, each level was
+        ``(2^level - 1) / 2`` input pixels off)."""
         homography = self._homography
         factor = 0.5**level
         if self.lens is None:
@@ -402,18 +408,16 @@ class PixelMap:
                 homography = homography @ np.array(
                     [[1.0, 0.0, offset[0]], [0.0, 1.0, offset[1]], [0.0, 0.0, 1.0]])
             if level:
-                level_from_input = np.array([[factor, 0.0, 0.5 * factor - 0.5],
-                                             [0.0, factor, 0.5 * factor - 0.5],
-                                             [0.0, 0.0, 1.0]])
-                homography = homography @ np.linalg.inv(level_from_input)
+                input_from_level = np.diag([2.0**level, 2.0**level, 1.0])
+                homography = homography @ input_from_level
             return cv2.warpPerspective(pixels, homography, self.size, dst=out,
                                        flags=interpolation, borderMode=border,
                                        borderValue=fill)
         # one pass: output -> wall -> camera ray -> lens -> input pixel
         map_x, map_y = MAP_CACHE.get(self.lens, homography, self.size)
         if level or offset != (0, 0):
-            map_x = (map_x - offset[0] + 0.5) * factor - 0.5
-            map_y = (map_y - offset[1] + 0.5) * factor - 0.5
+            map_x = (map_x - offset[0]) * factor
+            map_y = (map_y - offset[1]) * factor
         return cv2.remap(pixels, map_x, map_y, interpolation, dst=out, borderMode=border,
                          borderValue=fill)
 

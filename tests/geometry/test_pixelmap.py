@@ -16,6 +16,7 @@ from gsrwt_cli.geometry.framing import Framing, plan_output
 from gsrwt_cli.geometry.lens import Lens
 from gsrwt_cli.geometry.pixelmap import PixelMap
 from tests.helpers.camera import camera_axes
+from tests.helpers.images import phase_shift, smooth_texture
 
 DISTANCE = 10.0
 WIDTH, HEIGHT, FOCAL = 640, 480, 500.0
@@ -195,3 +196,58 @@ def test_a_maps_inverse_is_computed_once_and_cannot_be_changed():
     points = np.array([[0.0, 0.0], [100.0, 50.0], [319.0, 239.0]])
     np.testing.assert_allclose(pixel_map.to_output(pixel_map.to_input(points)), points,
                                atol=1e-9)
+
+
+def opencv_render(view: View, texture: np.ndarray) -> np.ndarray:
+    """What OpenCV's camera (the view's pose, intrinsics and lens) sees of a frontal
+    ``texture`` on the wall: each camera pixel's ray by ``cv2.undistortPoints``, met with the
+    wall, the texture sampled there (its centre where the optical axis meets the wall, one
+    texel per ``Zc / f`` wall units)."""
+    up, right, forward = camera_axes(view.pan, view.tilt)
+    cols, rows = np.meshgrid(np.arange(view.width, dtype=np.float64),
+                             np.arange(view.height, dtype=np.float64))
+    pixels = np.column_stack([cols.ravel(), rows.ravel()])[:, None, :]
+    lens = view.intrinsics.lens
+    coefficients = None if lens is None else lens.opencv_coefficients()
+    criteria = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 60, 1e-12)
+    ideal = cv2.undistortPoints(pixels, view.intrinsics.matrix(), coefficients, None, None,
+                                None, criteria).reshape(-1, 2)
+    rays = ideal[:, :1] * right - ideal[:, 1:] * up + forward  # OpenCV's y points down
+    wall = rays[:, :2] * (DISTANCE / rays[:, 2:])
+    axis = DISTANCE * forward[:2] / forward[2]
+    unit = DISTANCE / view.focal
+    height, width = texture.shape[:2]
+    map_x = (wall[:, 1] - axis[1]) / unit + (width - 1) / 2
+    map_y = (height - 1) / 2 - (wall[:, 0] - axis[0]) / unit
+    return cv2.remap(texture, map_x.reshape(view.height, view.width).astype(np.float32),
+                     map_y.reshape(view.height, view.width).astype(np.float32),
+                     cv2.INTER_LINEAR)
+
+
+@pytest.mark.parametrize("name", [None, "plumb_bob"])
+@pytest.mark.parametrize(("pan", "tilt", "scale", "levels"),
+                         [(0, 0, 0.52, 1), (10, 30, 0.4, 2), (10, 30, 0.2, 3)])
+def test_the_antialiased_warp_is_not_shifted(name, pan, tilt, scale, levels):
+    """A fine texture rendered by OpenCV's camera (a pinhole, and a plumb_bob lens), rectified
+    antialiased where the output shrinks it (frontally 1.9 times; tilted, its far side most,
+    up to 7 times), so that 1, 2 and 3 pyramid levels are blended: its shift against the
+    area-averaged reference (the same map unfiltered at 8 times the output's size, averaged
+    over 8x8 blocks) is under 0.05 output pixels by phase correlation (measured: 0.004-0.015;
+    0.31-0.52 when the levels were sampled as if centred like a box average's pixels,
+    ``cv2.pyrDown``'s level ``l`` then ``(2^l - 1) / 2`` input pixels off)."""
+    from gsrwt_cli.geometry.pixelmap import pyramid_level
+
+    width, height = 1280, 960
+    view = View(pan, tilt, 1000.0, width=width, height=height,
+                lens=None if name is None else LENSES[name])
+    image = opencv_render(view, smooth_texture(3 * height, 3 * width, 11, channels=1))
+    pixel_map = plan_output(view, Framing(bbox="crop", scale=scale)).pixel_map
+    used = pyramid_level(pixel_map.shrink(32, (width, height)))
+    assert math.ceil(used.max()) == levels
+    output = pixel_map.warp(image, cv2.INTER_LINEAR, (0.0,) * 4, antialias=True)
+    out_width, out_height = pixel_map.size
+    fine = pixel_map.then(np.array([[8.0, 0, 3.5], [0, 8.0, 3.5], [0, 0, 1]]),
+                          (8 * out_width, 8 * out_height))
+    reference = cv2.resize(fine.warp(image, cv2.INTER_LINEAR, (0.0,) * 4),
+                           (out_width, out_height), interpolation=cv2.INTER_AREA)
+    assert phase_shift(reference, output) < 0.05

@@ -33,3 +33,19 @@ def psnr(a: np.ndarray, b: np.ndarray, mask: np.ndarray) -> float:
     diff = a.astype(float)[mask] - b.astype(float)[mask]
     mse = float(np.mean(diff**2))
     return math.inf if mse == 0 else 10 * math.log10(255.0**2 / mse)
+
+
+def phase_shift(reference: np.ndarray, image: np.ndarray, border: int = 3) -> float:
+    """The larger component of ``image``'s shift against ``reference`` (output pixels) by
+    ``cv2.phaseCorrelate`` (Hann window), on an inner crop whose sides are even sizes the
+    DFT takes as they are (padded to an odd size, its peak is placed half a pixel off)."""
+    def side(length: int) -> int:
+        return max(n for n in range(2, length + 1, 2) if cv2.getOptimalDFTSize(n) == n)
+
+    height = side(reference.shape[0] - 2 * border)
+    width = side(reference.shape[1] - 2 * border)
+    crop = (slice(border, border + height), slice(border, border + width))
+    window = cv2.createHanningWindow((width, height), cv2.CV_64F)
+    (dx, dy), _ = cv2.phaseCorrelate(reference[crop].astype(np.float64),
+                                     image[crop].astype(np.float64), window)
+    return max(abs(dx), abs(dy))
