@@ -26,7 +26,13 @@ from ..batch.frame_sources import LogPoses, VideoSource
 from ..batch.rectify_jobs import Counts, Settings, worker_context
 from ..batch.reruns import made_with
 from ..batch.sequence_workers import EstimatedPoses
-from ..batch.video_jobs import StreamJob, output_of, remove_video_temporaries, run_stream
+from ..batch.video_jobs import (
+    StreamJob,
+    output_of,
+    remove_video_temporaries,
+    run_stream,
+    takes_planes,
+)
 from ..inputs.pose_log import PoseLog, load_pose_log
 from ..inputs.sidecar import SidecarError
 from ..inputs.videos import VIDEO_EXTENSIONS, VideoError, import_av, is_video_name
@@ -138,8 +144,8 @@ def rectify_video(inputs: tuple[str, ...], outdir: Path | Location, poses: str |
                   f"{estimating.min_confidence:g} smooth={smooth:g}")
     words += f" max_pose_gap={max_gap:g} codec={codec}" + (" steady=on" if steady else "")
     job = StreamJob(source, output, codec, frame_poses,
-                    partial(VideoSource, source, settings.max_input_pixels), words.strip(),
-                    steady)
+                    partial(VideoSource, source, settings.max_input_pixels,
+                            takes_planes(codec, settings)), words.strip(), steady)
     run_stream_command(job, outdir, settings, table, table_given, run, given)
 
 
