@@ -104,9 +104,14 @@ def warp_yuv420(frame: Yuv420, pixel_map: PixelMap, interpolation: int, fill: fl
                 antialias: bool) -> Yuv420:
     """``frame`` warped through ``pixel_map`` (no lens: :meth:`PixelMap.warp`'s one
     ``warpPerspective`` per plane, the antialiasing and the horizon's fill included) into
-    new planes of the map's size, which must be even. ``fill``: a grey in BGR units."""
+    new planes of the map's size, which must be even. ``fill``: a grey in BGR units.
+
+    ``antialias``: the chroma is filtered where the luma is; whether any of it is, is
+    measured once, on the luma (:meth:`PixelMap.filters`: the chroma map shrinks alike), not
+    once per plane (each measure costs about a third of a plane's warp)."""
     if pixel_map.lens is not None or pixel_map.output_lens is not None:
         raise ValueError("planes are warped through a pinhole only")
+    antialias = antialias and pixel_map.filters((frame.width, frame.height))
     width, height = pixel_map.size
     out = Yuv420.empty(width, height)
     luma_fill, chroma_fill = yuv_fill(fill)

@@ -49,14 +49,17 @@ def test_planes_turn_to_bgr_as_the_decoder_turns_its_frames(clip) -> None:
         np.testing.assert_array_equal(planes.to_bgr(), frame.to_ndarray(format="bgr24"))
 
 
-@pytest.mark.parametrize("fill", [0.0, 200.0])
-def test_planes_warped_match_the_bgr_warp_the_encoder_would_get(clip, fill: float) -> None:
+@pytest.mark.parametrize(("fill", "scale"), [(0.0, 1.0), (200.0, 1.0), (0.0, 0.4)])
+def test_planes_warped_match_the_bgr_warp_the_encoder_would_get(clip, fill: float,
+                                                                scale: float) -> None:
     """Each plane within 40 dB PSNR of the BGR path's (converted for the encoder as it
-    converts it), at every pose of the sweep, the fill and the horizon's edge included."""
+    converts it), at every pose of the sweep, the fill and the horizon's edge included;
+    ``scale`` 0.4: an output that shrinks the input, antialiased."""
     decoded, poses = clip
     for frame, (pan, tilt, roll) in zip(decoded, poses):
         view = view_from_values({"pan": pan, "tilt": tilt, "roll": roll, "focal": FOCAL}, "x")
-        pixel_map = plan_image(view, WIDTH, HEIGHT, Framing()).pixel_map
+        pixel_map = plan_image(view, WIDTH, HEIGHT, Framing(scale=scale)).pixel_map
+        assert pixel_map.filters((WIDTH, HEIGHT)) == (scale < 1)
         planes = Yuv420.from_stacked(frame.to_ndarray())
         warped = warp_yuv420(planes, pixel_map, INTERPOLATIONS["linear"], fill, True)
         expected = bgr_warp_as_encoded(planes, pixel_map, fill)
