@@ -19,7 +19,6 @@ from pathlib import Path
 from typing import Any
 
 import click
-from tqdm import tqdm
 
 from ..base.messages import one_line, quote
 from ..batch.frame_sources import LogPoses, VideoSource
@@ -41,7 +40,7 @@ from ..io.storage import Location
 from ..io.targets import file_identity
 from ..tables.columns import VIDEO_COLUMNS
 from ..tables.writer import read_table
-from .batch_run import Terminated, end_batch, recorded_rows, stop_on_signals
+from .batch_run import Terminated, end_batch, progress_bar, recorded_rows, stop_on_signals
 from .options import InputError, prepare_directory, prepare_table
 
 
@@ -251,9 +250,7 @@ def run_stream_command(job: StreamJob, outdir: Path | Location, settings: Settin
 
 def _run(job: StreamJob, settings: Settings, table: Any, run: Any,
          previous: list[dict[str, Any]]) -> tuple[Counts, BaseException | None]:
-    tqdm.monitor_interval = 0
-    progress = tqdm(unit="frame", file=sys.stderr, dynamic_ncols=True,
-                    disable=run.quiet or not sys.stderr.isatty())
+    progress = progress_bar(run.quiet, unit="frame")
     counts = Counts()
     stopped: BaseException | None = None
 
