@@ -107,8 +107,8 @@ class VideoEncoder:
             raise VideoEncodeError(f"timestamp {pts} does not follow {self._last_pts}")
         if isinstance(pixels, Yuv420) and self.codec.pixel_format != "yuv420p":
             pixels = pixels.to_bgr()
-        if isinstance(pixels, Yuv420):
-            frame = av.VideoFrame.from_ndarray(pixels.stacked(), format="yuv420p")
+        if isinstance(pixels, Yuv420):  # its memory, not a copy (each frame's planes are new)
+            frame = av.VideoFrame.from_numpy_buffer(pixels.stacked(), format="yuv420p")
         else:
             frame = av.VideoFrame.from_ndarray(np.ascontiguousarray(pixels), format="bgr24")
         frame.pts = pts
