@@ -51,7 +51,38 @@ def test_a_params_view_beyond_a_plain_pinhole_takes_the_views_way():
 
 
 def test_a_command_still_gets_what_it_needs():
-    assert {"numpy", "cv2", "tqdm"} <= imported_top_level_modules("rectify", "--help")
+    assert {"numpy", "cv2"} <= imported_top_level_modules("rectify", "--help")
+
+
+def test_a_video_run_imports_only_what_its_frames_need(tmp_path):
+    """``rectify VIDEO --poses FILE`` off a terminal (the benchmark's run,
+    ``benchmarks/bench_video.py``): PyAV, OpenCV and numpy, and none of the libraries of
+    other inputs and outputs: no progress bar (tqdm, imported only to draw one on a
+    terminal), no image headers (imagesize), no YAML (a CSV pose log and no calibration
+    file), no EXIF (PIL), no bags (rosbags), no cluster (dask), no stores (fsspec)."""
+    av = pytest.importorskip("av")
+    import numpy as np
+
+    clip, log = tmp_path / "clip.mp4", tmp_path / "poses.csv"
+    with av.open(str(clip), mode="w") as container:
+        stream = container.add_stream("libx264", rate=30)
+        stream.width, stream.height, stream.pix_fmt = 64, 48, "yuv420p"
+        for index in range(3):
+            frame = av.VideoFrame.from_ndarray(np.full((48, 64, 3), 40 * index, np.uint8),
+                                               format="bgr24")
+            frame.pts = index
+            for packet in stream.encode(frame):
+                container.mux(packet)
+        for packet in stream.encode():
+            container.mux(packet)
+    log.write_text("time,pan,tilt\n0,0,10\n1,5,12\n")
+    imported = imported_top_level_modules("rectify", str(clip), "--poses", str(log), "--focal",
+                                          "60", "--codec", "h264", "-o", str(tmp_path / "out"),
+                                          "-q")
+    assert (tmp_path / "out" / "clip.mp4").is_file()
+    assert {"av", "cv2", "numpy"} <= imported
+    assert imported & {"tqdm", "imagesize", "yaml", "PIL", "rosbags", "dask", "distributed",
+                       "fsspec", "scipy"} == set()
 
 
 @pytest.mark.parametrize("name", sorted(COMMANDS))

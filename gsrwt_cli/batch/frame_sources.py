@@ -32,6 +32,7 @@ from ..inputs.videos import FrameFailure, VideoError, VideoReader
 from .job_errors import JobError
 
 if TYPE_CHECKING:  # a bag's modules only when a bag is read
+    from ..imaging.yuv import Yuv420
     from ..inputs.bags import PoseSamples
 
 #: A bag's frames as a video's: pts in microseconds from the first frame's stamp.
@@ -45,14 +46,15 @@ class StreamFrame:
     """One frame of a stream: its ``index`` (from 0), ``time`` (seconds from the first
     frame), ``absolute`` (seconds on the source's clock), ``pts`` (a video output's
     timestamp, in the source's ``time_base``), ``stamp_ns`` (a bag output's, nanoseconds),
-    and its ``pixels``, or None with the ``error`` that made it unreadable."""
+    and its ``pixels`` (BGR, or a video's YUV planes when its source was opened for them),
+    or None with the ``error`` that made it unreadable."""
 
     index: int
     time: float | None
     absolute: float | None
     pts: int | None
     stamp_ns: int | None
-    pixels: np.ndarray | None
+    pixels: np.ndarray | Yuv420 | None
     error: str | None = None
 
 
@@ -80,15 +82,17 @@ class FrameSource(Protocol):
 
 class VideoSource:
     """A video file's frames (:class:`~gsrwt_cli.inputs.videos.VideoReader`); opening it
-    raises :class:`~gsrwt_cli.inputs.videos.VideoError`."""
+    raises :class:`~gsrwt_cli.inputs.videos.VideoError`. ``planes``: a frame decoded as 8-bit
+    YUV 4:2:0 comes as its planes (:class:`~gsrwt_cli.imaging.yuv.Yuv420`), not as BGR."""
 
-    def __init__(self, path: Path, max_pixels: float = math.inf) -> None:
+    def __init__(self, path: Path, max_pixels: float = math.inf, planes: bool = False) -> None:
         self.reader = VideoReader(path, max_pixels)
         self.rate = self.reader.info.rate
         self.time_base = self.reader.info.time_base
+        self.planes = planes
 
     def frames(self) -> Iterator[StreamFrame]:
-        frames = self.reader.frames()
+        frames = self.reader.frames(self.planes)
         while True:
             try:
                 item = next(frames)

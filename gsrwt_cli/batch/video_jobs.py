@@ -47,7 +47,9 @@ import numpy as np
 
 from ..api.rectify import plan_image, view_for_image
 from ..geometry.framing import steady_box
-from ..imaging.images import Working, encode_image, warp_image, warp_working
+from ..geometry.pixelmap import PixelMap
+from ..imaging.images import INTERPOLATIONS, Working, encode_image, warp_image, warp_working
+from ..imaging.yuv import Yuv420, warp_yuv420
 from ..inputs.records import RecordError, view_from_values
 from ..io.outputs import (
     TEMPORARY_PATTERN,
@@ -146,6 +148,16 @@ def output_of(source: Path, outdir: Path, codec: str) -> Path:
     return stem.with_suffix(VIDEO_CODECS[codec].extension)
 
 
+def takes_planes(codec: str, settings: Settings) -> bool:
+    """Whether a video's frames are decoded as their YUV 4:2:0 planes for this output
+    (:mod:`~gsrwt_cli.imaging.yuv`): a ``yuv420p`` video codec (``h264``) without alpha;
+    each frame whose camera has a lens is still warped in BGR (:func:`process_frame`)."""
+    from ..imaging.videos import VIDEO_CODECS
+
+    codec_of = VIDEO_CODECS.get(codec)
+    return codec_of is not None and codec_of.pixel_format == "yuv420p" and not settings.alpha
+
+
 def frame_file(directory: Path, index: int) -> Path:
     """An image sequence's file of frame ``index``: ``000042.png``."""
     return directory / f"{index:0{FRAME_DIGITS}d}.png"
@@ -179,12 +191,21 @@ def process_frame(job: FrameJob, settings: Settings, made_with: str) -> Row:
                 framing = replace(framing, bbox=steady_box(view_for_image(view, width, height),
                                                            first))
             plan = plan_image(view, width, height, framing)
+            pixels = job.pixels
+            if isinstance(pixels, Yuv420):
+                if _warps_planes(job, plan.pixel_map, settings):
+                    row.update(plan_row(plan), image=job.image, made_with=made_with,
+                               status="ok", _pixels=warp_yuv420(
+                                   pixels, plan.pixel_map, INTERPOLATIONS[settings.interpolation],
+                                   settings.fill, settings.antialias))
+                    return row
+                pixels = pixels.to_bgr()  # as the decoder's frame would have been converted
             if settings.alpha:
-                warped = warp_image(job.pixels, plan.pixel_map, settings.interpolation,
+                warped = warp_image(pixels, plan.pixel_map, settings.interpolation,
                                     settings.fill, True, settings.antialias)
             else:  # as decoded: at a frame's size, padding BGR to BGRA and back costs more
                 # than the faster BGRA warp saves (640x480: 4.4 ms against 1.6, measured)
-                warped = warp_working(Working(job.pixels), plan.pixel_map,
+                warped = warp_working(Working(pixels), plan.pixel_map,
                                       settings.interpolation, settings.fill, False,
                                       antialias=settings.antialias).pixels
             status = "ok"
@@ -207,6 +228,15 @@ def process_frame(job: FrameJob, settings: Settings, made_with: str) -> Row:
     except Exception as error:  # every failure of one frame is that frame's row
         row.update(status="error", error=error_text(error, settings.describe))
     return row
+
+
+def _warps_planes(job: FrameJob, pixel_map: PixelMap, settings: Settings) -> bool:
+    """Whether a frame decoded as YUV 4:2:0 planes is warped as them (for the H.264 encoder,
+    :mod:`~gsrwt_cli.imaging.yuv`): through a pinhole (a lens's map is warped in BGR),
+    without alpha, for a video (an image sequence and a bag take BGR), at an even size."""
+    width, height = pixel_map.size
+    return (pixel_map.lens is None and pixel_map.output_lens is None and not settings.alpha
+            and job.output is None and not job.camera and width % 2 == 0 and height % 2 == 0)
 
 
 class FrameWorker(ProcessWorker):

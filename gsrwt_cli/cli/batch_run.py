@@ -18,6 +18,33 @@ from ..io.outputs import open_atomic
 from ..io.storage import location
 
 
+class _NoProgress:
+    """A progress bar that is not drawn (``-q``, or stderr is not a terminal): what a batch
+    calls on one, without importing tqdm (a fiftieth of a second of start-up)."""
+
+    def update(self, count: int = 1) -> None:
+        """Nothing to draw."""
+
+    def write(self, line: str, file: IO[str] | None = None) -> None:
+        """The line, as ``tqdm.write`` prints it beside a bar (to stderr unless ``file``)."""
+        print(line, file=file or sys.stderr)
+
+    def close(self) -> None:
+        """Nothing to close."""
+
+
+def progress_bar(quiet: bool, **options: Any) -> Any:
+    """A batch's progress bar on stderr (tqdm, imported here, with ``options``), drawn only
+    on a terminal and not with ``quiet``; else one that draws nothing (:class:`_NoProgress`).
+    tqdm's monitor thread is off: workers may fork from this process."""
+    if quiet or not sys.stderr.isatty():
+        return _NoProgress()
+    from tqdm import tqdm
+
+    tqdm.monitor_interval = 0
+    return tqdm(file=sys.stderr, dynamic_ncols=True, **options)
+
+
 class TableWriteError(Exception):
     """The table could not be written (a full disk, say): the run cannot keep its record."""
 

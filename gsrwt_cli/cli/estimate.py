@@ -8,7 +8,6 @@ from pathlib import Path, PurePosixPath
 from typing import Any
 
 import click
-from tqdm import tqdm
 
 from ..api.estimate import DEFAULT_MIN_CONFIDENCE, WALL_CHOICES
 from ..base.messages import one_line
@@ -50,6 +49,7 @@ from .rectify import (
     end_batch,
     open_table,
     parse_pixel_count,
+    progress_bar,
     stop_on_signals,
 )
 from .sequence_options import frames_option
@@ -203,9 +203,7 @@ def estimate(inputs: tuple[str, ...], output: str | None, fmt: str | None, recur
         report_error(problem)
     counts = {"ok": 0, "failed": len(unreadable), "interrupted": 0}
     stopped: BaseException | None = None
-    tqdm.monitor_interval = 0  # no monitor thread: workers may fork from this process
-    progress = tqdm(total=len(job_list), unit="img", file=sys.stderr, dynamic_ncols=True,
-                    disable=quiet or not sys.stderr.isatty())
+    progress = progress_bar(quiet, total=len(job_list), unit="img")
     with stop_on_signals(), open_table(output) as stream:
         writer: TableWriter | YamlRecordWriter = (
             YamlRecordWriter(stream, estimate_columns(lens_from_lines))

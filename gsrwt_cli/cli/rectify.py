@@ -23,7 +23,6 @@ from pathlib import Path, PurePosixPath
 from typing import Any
 
 import click
-from tqdm import tqdm
 
 from ..api.estimate import DEFAULT_MIN_CONFIDENCE, WALL_CHOICES
 from ..base.messages import one_line, quote
@@ -83,6 +82,7 @@ from .batch_run import (  # noqa: F401  (named here too: estimate and the tests 
     Terminated,
     end_batch,
     open_table,
+    progress_bar,
     recorded_rows,
     stop_on_signals,
 )
@@ -845,11 +845,7 @@ def run_planned(batch: PlannedBatch, settings: Settings, table: TableTarget, run
     """Run the jobs (on local processes or the Dask scheduler) with a progress bar, writing
     the table row by row; returns the counts and the signal that stopped the run, if one did
     (every job then still has its row)."""
-    tqdm.monitor_interval = 0  # no monitor thread: workers may fork from this process
-    progress = tqdm(
-        total=len(batch.jobs), unit="img", file=sys.stderr, dynamic_ncols=True,
-        disable=run.quiet or not sys.stderr.isatty(),
-    )
+    progress = progress_bar(run.quiet, total=len(batch.jobs), unit="img")
     for problem in batch.unreadable:
         progress.write(f"Error: {one_line(problem)}", file=sys.stderr)
     counts = Counts(failed=len(batch.unreadable))

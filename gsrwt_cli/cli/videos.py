@@ -19,14 +19,19 @@ from pathlib import Path
 from typing import Any
 
 import click
-from tqdm import tqdm
 
 from ..base.messages import one_line, quote
 from ..batch.frame_sources import LogPoses, VideoSource
 from ..batch.rectify_jobs import Counts, Settings, worker_context
 from ..batch.reruns import made_with
 from ..batch.sequence_workers import EstimatedPoses
-from ..batch.video_jobs import StreamJob, output_of, remove_video_temporaries, run_stream
+from ..batch.video_jobs import (
+    StreamJob,
+    output_of,
+    remove_video_temporaries,
+    run_stream,
+    takes_planes,
+)
 from ..inputs.pose_log import PoseLog, load_pose_log
 from ..inputs.sidecar import SidecarError
 from ..inputs.videos import VIDEO_EXTENSIONS, VideoError, import_av, is_video_name
@@ -35,7 +40,7 @@ from ..io.storage import Location
 from ..io.targets import file_identity
 from ..tables.columns import VIDEO_COLUMNS
 from ..tables.writer import read_table
-from .batch_run import Terminated, end_batch, recorded_rows, stop_on_signals
+from .batch_run import Terminated, end_batch, progress_bar, recorded_rows, stop_on_signals
 from .options import InputError, prepare_directory, prepare_table
 
 
@@ -138,8 +143,8 @@ def rectify_video(inputs: tuple[str, ...], outdir: Path | Location, poses: str |
                   f"{estimating.min_confidence:g} smooth={smooth:g}")
     words += f" max_pose_gap={max_gap:g} codec={codec}" + (" steady=on" if steady else "")
     job = StreamJob(source, output, codec, frame_poses,
-                    partial(VideoSource, source, settings.max_input_pixels), words.strip(),
-                    steady)
+                    partial(VideoSource, source, settings.max_input_pixels,
+                            takes_planes(codec, settings)), words.strip(), steady)
     run_stream_command(job, outdir, settings, table, table_given, run, given)
 
 
@@ -245,9 +250,7 @@ def run_stream_command(job: StreamJob, outdir: Path | Location, settings: Settin
 
 def _run(job: StreamJob, settings: Settings, table: Any, run: Any,
          previous: list[dict[str, Any]]) -> tuple[Counts, BaseException | None]:
-    tqdm.monitor_interval = 0
-    progress = tqdm(unit="frame", file=sys.stderr, dynamic_ncols=True,
-                    disable=run.quiet or not sys.stderr.isatty())
+    progress = progress_bar(run.quiet, unit="frame")
     counts = Counts()
     stopped: BaseException | None = None
 

@@ -339,6 +339,13 @@ class PixelMap:
             cv2.fillPoly(warped, [points], fill, lineType=cv2.LINE_8, shift=8)
         return warped
 
+    def filters(self, source_size: tuple[int, int], step: int = 32) -> bool:
+        """Whether :meth:`warp`'s ``antialias`` filters any of the output of an input of
+        ``source_size`` (width, height): some output pixel with a source spans more than
+        :data:`ANTIALIAS_SHRINK` input pixels (on :meth:`shrink`'s grid of every ``step``-th
+        pixel, as the warp measures it)."""
+        return bool(pyramid_level(self.shrink(step, source_size)).max() > 0)
+
     def _antialias(self, pixels: np.ndarray, warped: np.ndarray, interpolation: int,
                    fill: tuple[float, ...], step: int = 32) -> None:
         """Blend coarser pyramid levels into ``warped`` where the map shrinks the input by

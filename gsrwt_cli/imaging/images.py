@@ -21,7 +21,6 @@ from pathlib import Path
 from typing import IO, TYPE_CHECKING
 
 import cv2
-import imagesize
 import numpy as np
 
 from ..base.messages import one_line
@@ -170,6 +169,8 @@ def header_size(data: bytes | IO[bytes]) -> tuple[int, int] | None:
     reads the header of JPEG, PNG, TIFF, BMP, WebP and other formats (EXIF rotation ignored,
     as everywhere in gsrwt).
     """
+    import imagesize  # here: a video's run measures no image file
+
     stream = io.BytesIO(data) if isinstance(data, (bytes, bytearray, memoryview)) else data
     try:
         width, height = imagesize.get(stream, exif_rotation=False)

@@ -18,6 +18,8 @@ from typing import IO, Any
 
 import numpy as np
 
+from .yuv import Yuv420
+
 
 class VideoEncodeError(Exception):
     """The encoder cannot take this output (a codec missing, a size it refuses)."""
@@ -54,9 +56,9 @@ def codec_available(codec: VideoCodec) -> bool:
 
 
 class VideoEncoder:
-    """Frames (BGR, 8 bits) to a video in ``stream``, opened on the first frame (whose size
-    every later frame must have). Call :meth:`close` to finish the file; on an error, drop
-    the stream (the caller's temporary file) instead."""
+    """Frames (BGR, 8 bits, or YUV 4:2:0 planes) to a video in ``stream``, opened on the
+    first frame (whose size every later frame must have). Call :meth:`close` to finish the
+    file; on an error, drop the stream (the caller's temporary file) instead."""
 
     def __init__(self, stream: IO[bytes], codec: VideoCodec, time_base: Fraction,
                  rate: Fraction | None) -> None:
@@ -89,8 +91,10 @@ class VideoEncoder:
             raise
         self._container, self._video, self.size = container, video, (width, height)
 
-    def write(self, pixels: np.ndarray, pts: int) -> None:
-        """Encode one frame at ``pts`` (in the input's ``time_base``); pts must increase."""
+    def write(self, pixels: np.ndarray | Yuv420, pts: int) -> None:
+        """Encode one frame (BGR, or :class:`~gsrwt_cli.imaging.yuv.Yuv420` planes, taken
+        as they are by a ``yuv420p`` codec) at ``pts`` (in the input's ``time_base``); pts
+        must increase."""
         import av
 
         height, width = pixels.shape[:2]
@@ -101,7 +105,12 @@ class VideoEncoder:
                                    f"{self.size[0]}x{self.size[1]}")  # type: ignore[index]
         if self._last_pts is not None and pts <= self._last_pts:
             raise VideoEncodeError(f"timestamp {pts} does not follow {self._last_pts}")
-        frame = av.VideoFrame.from_ndarray(np.ascontiguousarray(pixels), format="bgr24")
+        if isinstance(pixels, Yuv420) and self.codec.pixel_format != "yuv420p":
+            pixels = pixels.to_bgr()
+        if isinstance(pixels, Yuv420):  # its memory, not a copy (each frame's planes are new)
+            frame = av.VideoFrame.from_numpy_buffer(pixels.stacked(), format="yuv420p")
+        else:
+            frame = av.VideoFrame.from_ndarray(np.ascontiguousarray(pixels), format="bgr24")
         frame.pts = pts
         frame.time_base = self.time_base
         for packet in self._video.encode(frame):

@@ -55,12 +55,10 @@ from typing import Any
 from xml.etree import ElementTree
 
 import numpy as np
-import yaml
 
 from ..base.messages import one_line, quote, token
 from ..geometry.camera import Intrinsics, ViewError
 from ..geometry.lens import LENS_ALIASES, LENS_MODELS, Lens
-from ..io.safe_yaml import YamlInputError, load_yaml
 from ..io.storage import location, open_input
 
 #: Calibration files larger than this are refused unread (a real one is a few kilobytes;
@@ -282,6 +280,8 @@ def _read_opencv(path: str | Path, text: str) -> dict[str, Any]:
 
 def _opencv_yaml(path: str | Path, text: str) -> Any:
     """FileStorage YAML as Python values, by the bounded loader (:mod:`~gsrwt_cli.io.safe_yaml`)."""
+    from ..io.safe_yaml import YamlInputError, load_yaml  # PyYAML: only for YAML files
+
     text = _YAML_HEADER.sub("", text, count=1)  # "%YAML:1.0" is no YAML directive
     try:
         return load_yaml(text, opencv=True)
@@ -482,6 +482,8 @@ def _opencv_size(path: str | Path, key: str, value: object) -> tuple[float, floa
 
 def _read_ros(path: str | Path, text: str) -> dict[str, Any]:
     """The raw fields of a ROS ``camera_info`` YAML file."""
+    from ..io.safe_yaml import YamlInputError, load_yaml
+
     try:
         document = load_yaml(text)
     except YamlInputError as error:
@@ -730,6 +732,8 @@ def write_ros_yaml(path: str | Path, intrinsics: Intrinsics, camera_name: str = 
         "rectification_matrix": block(np.eye(3), 3, 3),
         "projection_matrix": block(projection, 3, 4),
     }
+    import yaml
+
     text = yaml.safe_dump(document, default_flow_style=None, sort_keys=False)
     Path(path).write_text(text, encoding="utf-8")
 

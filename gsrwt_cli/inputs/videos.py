@@ -20,11 +20,14 @@ from dataclasses import dataclass
 from fractions import Fraction
 from pathlib import Path
 from types import TracebackType
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from ..base.messages import one_line
+
+if TYPE_CHECKING:  # cv2 and the pixel map only when a frame's planes are warped
+    from ..imaging.yuv import Yuv420
 
 #: File name extensions of videos (``gsrwt rectify`` reads these as videos).
 VIDEO_EXTENSIONS = (".mp4", ".mkv", ".avi", ".mov", ".webm", ".m4v")
@@ -57,13 +60,15 @@ def import_av() -> Any:
 class VideoFrame:
     """One decoded frame: its ``index`` (presentation order, from 0), ``time`` (seconds from
     the first frame), ``absolute`` (``pts * time_base``), ``pts`` (in the stream's
-    ``time_base``; None if the container gives none) and ``pixels`` (BGR, 8 bits)."""
+    ``time_base``; None if the container gives none) and ``pixels`` (BGR, 8 bits; or, when
+    :meth:`VideoReader.frames` is asked for ``planes`` and the frame has them, its
+    :class:`~gsrwt_cli.imaging.yuv.Yuv420` planes as decoded)."""
 
     index: int
     time: float
     absolute: float
     pts: int | None
-    pixels: np.ndarray
+    pixels: np.ndarray | Yuv420
 
 
 @dataclass(frozen=True)
@@ -89,6 +94,26 @@ class VideoInfo:
     rate: Fraction | None
     codec: str
     duration: float | None
+
+
+#: Colour tags of a frame whose planes :class:`~gsrwt_cli.imaging.yuv.Yuv420` takes as they
+#: are (FFmpeg's numbers): colourspace unspecified (2), BT.470BG (5) or SMPTE 170M (6), both
+#: BT.601 as swscale converts an unspecified one; range unspecified (0) or limited (1).
+_PLANAR_COLORSPACES = (2, 5, 6)
+_PLANAR_RANGES = (0, 1)
+
+
+def _planes(frame: Any) -> Yuv420 | None:
+    """The frame's 8-bit YUV 4:2:0 planes when they mean what
+    :meth:`~gsrwt_cli.imaging.yuv.Yuv420.to_bgr` and the H.264 encoder take them to mean
+    (``yuv420p``, an even size, BT.601 limited range); else None."""
+    if (frame.format.name != "yuv420p" or frame.width % 2 or frame.height % 2
+            or frame.colorspace not in _PLANAR_COLORSPACES
+            or frame.color_range not in _PLANAR_RANGES):
+        return None
+    from ..imaging.yuv import Yuv420
+
+    return Yuv420.from_stacked(frame.to_ndarray())
 
 
 def _reason(error: BaseException) -> str:
@@ -143,11 +168,13 @@ class VideoReader:
                  traceback: TracebackType | None) -> None:
         self.container.close()
 
-    def frames(self) -> Iterator[VideoFrame | FrameFailure]:
+    def frames(self, planes: bool = False) -> Iterator[VideoFrame | FrameFailure]:
         """Every frame in presentation order (a refused packet as a :class:`FrameFailure`,
         placed by its timestamp among the frames decoded: decoders hand frames out later
         than their packets come in); raises :class:`VideoTruncatedError` at the end when
-        the file is cut short."""
+        the file is cut short. ``planes``: a frame that has 8-bit YUV 4:2:0 planes comes as
+        them (:class:`~gsrwt_cli.imaging.yuv.Yuv420`, no colour converted), any other as
+        BGR."""
         av = self._av
         time_base = self.info.time_base
         state = {"first": None, "index": 0}
@@ -198,7 +225,8 @@ class VideoReader:
                 yield from failures_before(pts if pts is not None else -math.inf)
                 index = state["index"]
                 time, absolute = times(pts, index)
-                pixels = frame.to_ndarray(format="bgr24")
+                yuv = _planes(frame) if planes else None
+                pixels = yuv if yuv is not None else frame.to_ndarray(format="bgr24")
                 yield VideoFrame(index, time, absolute, pts, pixels)
                 duration = (float(frame.duration * time_base) if frame.duration else
                             1 / float(self.info.rate) if self.info.rate else 0.0)

@@ -251,3 +251,18 @@ def test_the_antialiased_warp_is_not_shifted(name, pan, tilt, scale, levels):
     reference = cv2.resize(fine.warp(image, cv2.INTER_LINEAR, (0.0,) * 4),
                            (out_width, out_height), interpolation=cv2.INTER_AREA)
     assert phase_shift(reference, output) < 0.05
+
+
+@pytest.mark.parametrize("scale", [1.0, 0.9, 0.5, 0.25])
+def test_the_antialiasing_filters_exactly_where_filters_says(scale: float) -> None:
+    """``filters`` (the one measure a frame's three planes share): true for a map that
+    shrinks the input by more than 1.5, and then the antialiased warp differs from the plain
+    one; false otherwise, and then the two are the same array."""
+    rng = np.random.default_rng(5)
+    image = cv2.GaussianBlur(rng.integers(0, 255, (240, 320)).astype(np.uint8), (0, 0), 1.0)
+    pixel_map = PixelMap(np.diag([scale, scale, 1.0]), (int(320 * scale), int(240 * scale)))
+    filters = pixel_map.filters((320, 240))
+    assert filters == (1 / scale > 1.5)
+    plain = pixel_map.warp(image, cv2.INTER_LINEAR, (0.0,) * 4)
+    filtered = pixel_map.warp(image, cv2.INTER_LINEAR, (0.0,) * 4, antialias=True)
+    assert np.array_equal(plain, filtered) == (not filters)

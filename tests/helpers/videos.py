@@ -44,16 +44,16 @@ def slerped_poses(key_times: np.ndarray, key_poses: np.ndarray, times: np.ndarra
 
 def write_video(path: Path, frames: list[np.ndarray], pts: list[int], codec: str = "ffv1",
                 time_base: Fraction = TIME_BASE, rate: int = 30,
-                options: dict[str, str] | None = None) -> None:
+                options: dict[str, str] | None = None, pix_fmt: str | None = None) -> None:
     """Encode BGR ``frames`` at ``pts`` with PyAV (``ffv1``: lossless ``bgr0``; ``libx264``:
-    ``yuv420p``) into ``path`` (its extension picks the container)."""
+    ``yuv420p``, or ``pix_fmt``) into ``path`` (its extension picks the container)."""
     import av
 
     height, width = frames[0].shape[:2]
     with av.open(str(path), mode="w") as container:
         stream = container.add_stream(codec, rate=rate, options=options or {})
         stream.width, stream.height = width, height
-        stream.pix_fmt = "bgr0" if codec == "ffv1" else "yuv420p"
+        stream.pix_fmt = pix_fmt or ("bgr0" if codec == "ffv1" else "yuv420p")
         stream.time_base = time_base
         for image, stamp in zip(frames, pts):
             frame = av.VideoFrame.from_ndarray(image, format="bgr24")

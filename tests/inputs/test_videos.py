@@ -75,3 +75,22 @@ def test_what_is_not_a_video(tmp_path: Path) -> None:
     with pytest.raises(VideoError, match="no such file"):
         VideoReader(tmp_path / "missing.mp4")
     assert is_video_name("A.MKV") and not is_video_name("a.png")
+
+
+def test_an_h264_clip_decodes_to_its_planes_only_when_asked(tmp_path: Path) -> None:
+    """``frames(planes=True)`` gives an H.264 clip's frames as their YUV 4:2:0 planes, and
+    BGR otherwise; a clip whose frames are not 8-bit 4:2:0 (FFV1's ``bgr0``, libx264's
+    ``yuv444p``) comes as BGR either way."""
+    from gsrwt_cli.imaging.yuv import Yuv420
+
+    h264, ffv1, full = tmp_path / "a.mp4", tmp_path / "b.mkv", tmp_path / "c.mp4"
+    write_video(h264, FRAMES[:3], STAMPS[:3], codec="libx264")
+    write_video(ffv1, FRAMES[:3], STAMPS[:3], codec="ffv1")
+    write_video(full, FRAMES[:3], STAMPS[:3], codec="libx264", pix_fmt="yuv444p")
+    for path, planar in ((h264, True), (ffv1, False), (full, False)):
+        for planes in (False, True):
+            with VideoReader(path) as reader:
+                frames = list(reader.frames(planes))
+            kinds = {type(frame.pixels) for frame in frames}
+            assert kinds == ({Yuv420} if planes and planar else {np.ndarray}), (path, planes)
+            assert [frame.index for frame in frames] == [0, 1, 2]
