@@ -1,8 +1,10 @@
-"""Rows in input order from work that finishes in any order: the one runner of every batch.
+"""Rows in input order from work that finishes in any order: the runner of every batch of files.
 
 ``gsrwt rectify`` and ``gsrwt estimate`` hand images to an executor's workers, whose rows come
 back as they finish; the table wants them in input order, and a stopped run still wants a
-row for every image. :func:`run_in_order` is that loop, once.
+row for every image. :func:`run_in_order` is that loop, once. (A video's or bag's frames,
+whose count is not known until the stream ends, are put in order as they are decoded:
+:mod:`~gsrwt_cli.batch.video_jobs` and :mod:`~gsrwt_cli.batch.sequence_workers`.)
 """
 
 from __future__ import annotations

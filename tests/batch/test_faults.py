@@ -219,11 +219,17 @@ def busy_worker(parent: int) -> int:
     raise AssertionError("no worker was busy")
 
 
+#: A pose the photos show (a rectangle's corners): without --bbox, framed ``full`` (capped),
+#: unlike ``POSE``'s given numbers, so the rows a stopped run makes itself must be too.
+GUIDED = ("--corners", "400,300 1200,250 1150,950 450,900", "--focal", "900")
+
+
+@pytest.mark.parametrize("pose", [POSE, GUIDED], ids=["given", "guided"])
 @pytest.mark.parametrize("stop, code", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
-def test_interrupt_writes_the_table_of_what_finished(tmp_path, stop, code):
+def test_interrupt_writes_the_table_of_what_finished(tmp_path, stop, code, pose):
     # Enough images that the stop lands mid-batch however fast the batch (40 took 0.4 s).
     sources = make_photos(tmp_path / "in", 120)
-    process = start_gsrwt("rectify", "in", *POSE, "-o", "out", "-j", "2", cwd=tmp_path,
+    process = start_gsrwt("rectify", "in", *pose, "-o", "out", "-j", "2", cwd=tmp_path,
                           own_session=True)
     wait_for_outputs(tmp_path / "out", 3, process)
     os.killpg(process.pid, stop)  # the whole group, as a terminal's Ctrl-C does
@@ -237,9 +243,11 @@ def test_interrupt_writes_the_table_of_what_finished(tmp_path, stop, code):
     assert statuses <= {"ok", "interrupted"} and "interrupted" in statuses, statuses
     assert_table_is_the_record(rows, tmp_path / "out", sources)
     assert stray_files(tmp_path) == []
+    frame = "bbox=full" if pose is GUIDED else "bbox=frontal"
+    assert all(frame in row["made_with"].split() for row in rows if row["status"] == "ok")
 
     first = {row["image"]: row for row in rows if row["status"] == "ok"}
-    rerun = run_gsrwt("rectify", "in", *POSE, "-o", "out", cwd=tmp_path)
+    rerun = run_gsrwt("rectify", "in", *pose, "-o", "out", cwd=tmp_path)
     assert rerun.returncode == 0, rerun.stderr
     again = {row["image"]: row for row in read_table(tmp_path / "out" / "gsrwt.csv")}
     for image, row in first.items():  # the record of the first run survives the rerun
