@@ -109,6 +109,28 @@ class _Worker:
     connection: Connection
     #: The indices of the items sent, in order: the first is the one being worked on.
     in_flight: deque[int] = field(default_factory=deque)
+    #: The thread that sends this worker's items, when they are sent by one
+    #: (:meth:`ProcessExecutor.map_stream`); it then owns the connection's end.
+    sender: _Sender | None = None
+
+    def send(self, item: Any) -> None:
+        """Send an item (or ``None``, to stop) through the sender thread, if any."""
+        if self.sender is not None:
+            self.sender.send(item)
+        else:
+            # A worker that died since its last result breaks the pipe: its sentinel
+            # then reports the death, and the item is reported with it.
+            with contextlib.suppress(OSError):
+                self.connection.send(item)
+
+    def close(self) -> None:
+        """Close the parent's end of the pipe, or have the sender thread close it once it
+        is done: closing it under a thread still writing would free its descriptor for the
+        next file or pipe opened, and the rest of the item would be written there."""
+        if self.sender is not None:
+            self.sender.close()
+        else:
+            self.connection.close()
 
 
 class ProcessExecutor(Generic[Item, Result]):
@@ -140,7 +162,8 @@ class ProcessExecutor(Generic[Item, Result]):
         self.context = context or multiprocessing.get_context()
         self.deaths = 0
 
-    def _start(self) -> _Worker:
+    def _start(self, threaded: bool = False) -> _Worker:
+        """A new worker; with ``threaded``, its items are sent by a thread of its own."""
         parent_end, child_end = self.context.Pipe(duplex=True)
         process = self.context.Process(
             target=_worker_main,
@@ -149,7 +172,7 @@ class ProcessExecutor(Generic[Item, Result]):
         )
         process.start()
         child_end.close()
-        return _Worker(process, parent_end)
+        return _Worker(process, parent_end, sender=_Sender(parent_end) if threaded else None)
 
     def map_unordered(self, items: Sequence[Item]) -> Iterator[tuple[int, Result]]:
         """``(index, result)`` for every item, as they complete."""
@@ -159,10 +182,7 @@ class ProcessExecutor(Generic[Item, Result]):
         def dispatch(worker: _Worker, up_to: int = ITEMS_IN_FLIGHT) -> None:
             while queue and len(worker.in_flight) < up_to:
                 worker.in_flight.append(queue.popleft())
-                # A worker that died since its last result breaks the pipe: its sentinel
-                # then reports the death, and the item is reported with it.
-                with contextlib.suppress(OSError):
-                    worker.connection.send(items[worker.in_flight[-1]])
+                worker.send(items[worker.in_flight[-1]])
 
         try:
             for _ in range(min(self.processes, len(items))):
@@ -221,24 +241,17 @@ class ProcessExecutor(Generic[Item, Result]):
             taken += 1
             return True
 
-        senders: dict[int, _Sender] = {}
-
         def dispatch(worker: _Worker, up_to: int = ITEMS_IN_FLIGHT) -> None:
-            # Sent by a thread: a large item (a frame) would fill the pipe while the worker
-            # is itself blocked sending its large result back, and neither would read.
-            sender = senders.get(id(worker))
-            if sender is None:
-                sender = senders[id(worker)] = _Sender(worker.connection)
             while len(worker.in_flight) < up_to and take():
                 index = queue.popleft()
                 worker.in_flight.append(index)
-                sender.send(held[index])
+                worker.send(held[index])
 
         try:
             if not take():
                 return
             for _ in range(self.processes):
-                workers.append(self._start())
+                workers.append(self._start(threaded=True))
             for up_to in range(1, ITEMS_IN_FLIGHT + 1):
                 for worker in workers:
                     dispatch(worker, up_to)
@@ -251,18 +264,13 @@ class ProcessExecutor(Generic[Item, Result]):
                             dispatch(other)
                         continue
                     self._abandoned(held[index], worker)
-                    senders.pop(id(worker)).close()
                     queue.extendleft(reversed(worker.in_flight))
                     yield index, self.on_death(held.pop(index), outcome)
-                    workers.append(self._start())
+                    workers.append(self._start(threaded=True))
                     for other in workers:
                         dispatch(other)
         finally:
-            for sender in senders.values():
-                sender.close()
-            self._stop(workers, _Held(held))  # a sender blocked on a pipe: its worker ends
-            for sender in senders.values():
-                sender.thread.join(STOP_GRACE_SECONDS)
+            self._stop(workers, _Held(held))
 
     def _outcomes(self, workers: list[_Worker]) -> Iterator[tuple[_Worker, int, bool, Any]]:
         """Wait until some busy worker has news, then give each one's: ``(worker, index,
@@ -287,7 +295,7 @@ class ProcessExecutor(Generic[Item, Result]):
             if worker.connection in ready or worker.process.sentinel in ready:
                 worker.process.join(STOP_GRACE_SECONDS)
                 self.deaths += 1
-                worker.connection.close()
+                worker.close()
                 workers.remove(worker)
                 worker.in_flight.popleft()
                 yield worker, index, False, death_reason(worker.process.exitcode)
@@ -301,8 +309,7 @@ class ProcessExecutor(Generic[Item, Result]):
         """End every worker: politely if idle, with SIGTERM (then SIGKILL) if busy."""
         for worker in workers:
             if not worker.in_flight:
-                with contextlib.suppress(OSError):
-                    worker.connection.send(None)
+                worker.send(None)
             elif worker.process.is_alive():
                 worker.process.terminate()
         for worker in workers:
@@ -314,7 +321,10 @@ class ProcessExecutor(Generic[Item, Result]):
             if self.on_abandon is not None and pid is not None:
                 for index in worker.in_flight:
                     self.on_abandon(items[index], pid)
-            worker.connection.close()
+            worker.close()
+        for worker in workers:  # a sender blocked on a pipe is freed by its worker's end
+            if worker.sender is not None:
+                worker.sender.thread.join(STOP_GRACE_SECONDS)
 
 
 class _Held(Sequence):  # type: ignore[type-arg]
@@ -331,7 +341,13 @@ class _Held(Sequence):  # type: ignore[type-arg]
 
 
 class _Sender:
-    """Items sent to one worker's pipe by a thread of their own, in order."""
+    """Items sent to one worker's pipe by a thread of their own, in order, which closes the
+    pipe when told to stop.
+
+    Used for large items (a video's frames): sent from the parent's loop, one would fill the
+    pipe while the worker is itself blocked sending its large result back, and neither would
+    read.
+    """
 
     def __init__(self, connection: Connection) -> None:
         self.connection = connection
@@ -343,6 +359,7 @@ class _Sender:
         while True:
             item = self.items.get()
             if item is _Sender:
+                self.connection.close()
                 return
             # A worker that died breaks the pipe: its sentinel reports the death.
             with contextlib.suppress(OSError, ValueError):
@@ -352,5 +369,5 @@ class _Sender:
         self.items.put(item)
 
     def close(self) -> None:
-        """Stop once the items queued are sent (or their pipe is broken)."""
+        """Close the pipe once the items queued are sent (or their pipe is broken)."""
         self.items.put(_Sender)
