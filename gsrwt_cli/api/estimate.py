@@ -19,7 +19,10 @@ Steps (no I/O, nothing printed; arrays in, degrees out):
 5. refusals a user can act on (:func:`_refusal`): no clear man-made structure (the frame
    explains the segments hardly better than random frames, :func:`structure_ratio`), a focal
    length the view does not pin down (:func:`focal_uncertainty`); and the confidence, the
-   calibrated chance of being within 2 degrees (:func:`confidence_of`).
+   calibrated chance of being within 2 degrees (:func:`confidence_of`), from how nearly a
+   different frame fits as well, how far the focal length's uncertainty turns the pose and how
+   far the frame's own segments, each direction's alone, point from its vertical and wall
+   normal (:func:`frame_misfit`).
 
 Unknown focal length: the clusters' vanishing points do not depend on it; two finite
 orthogonal ones ``p1, p2`` give ``f^2 = -(p1 - c).(p2 - c)``, and the frame
@@ -84,9 +87,9 @@ FOCAL_RANGE = (0.2, 10.0)
 #: Vanishing points further than this many diagonals from the principal point are
 #: "at infinity" for the focal length formula.
 FINITE_VP_DIAGONALS = 8.0
-#: Weights of :func:`confidence_of` (intercept, rival, focal degrees), fitted by
-#: ``benchmarks/calibrate_confidence.py`` on the York Urban training photos.
-CONFIDENCE_WEIGHTS = (10.424, -9.839, -0.564)
+#: Weights of :func:`confidence_of` (intercept, rival, focal degrees, misfit degrees), fitted
+#: by ``benchmarks/calibrate_confidence.py`` on the York Urban training photos.
+CONFIDENCE_WEIGHTS = (10.766, -9.373, -0.479, -1.495)
 #: ``gsrwt estimate`` and ``rectify --auto`` refuse estimates less confident than this: more
 #: likely more than 2 degrees off than not.
 DEFAULT_MIN_CONFIDENCE = 0.5
@@ -129,7 +132,9 @@ class PoseEstimate:
     direction of each (0, 1, 2 as in :data:`DIRECTION_NAMES`, -1 for none); ``structure``: how
     many times better than random frames the frame explains the segments
     (:func:`structure_ratio`); ``focal_uncertainty``: an estimated focal length's
-    (:class:`FocalUncertainty`, None when given); ``rival``: :attr:`ManhattanFrame.rival`.
+    (:class:`FocalUncertainty`, None when given); ``rival``: :attr:`ManhattanFrame.rival`;
+    ``misfit``: degrees between the frame's vertical or wall normal and the direction its own
+    segments alone meet in (:func:`frame_misfit`).
     """
 
     pose: Pose | None
@@ -147,6 +152,7 @@ class PoseEstimate:
     structure: float = 0.0
     focal_uncertainty: FocalUncertainty | None = None
     rival: float = 0.0
+    misfit: float = 0.0
 
     @property
     def ok(self) -> bool:
@@ -649,20 +655,54 @@ def _rotation_of(directions: np.ndarray, vertical: int, along: int, normal: int)
     return u @ vt
 
 
-def confidence_of(rival: float, focal_degrees: float = 0.0) -> float:
+def frame_misfit(normals: np.ndarray, half: np.ndarray, directions: np.ndarray,
+                 labels: np.ndarray, inlier_px: float, axes: tuple[int, ...]) -> float:
+    """How far, in degrees, the segments of each of ``axes`` (columns of ``directions``), taken
+    alone, point from the frame's axis: the largest angle between an axis and the
+    least-squares direction of its own segments.
+
+    The frame is orthogonal; the scene's edges, or the camera's model (principal point, focal
+    length, lens), may not be, and then the frame's vertical and wall normal are a compromise
+    between directions that disagree, off by about as much as they disagree (on the York
+    Urban photos the labelled segments' own directions are 1.5 to 2.8 degrees from orthogonal
+    where the frame is furthest from the truth). Each axis's direction is the one nearest
+    (least squares, the refinement's Cauchy weights of :func:`_refine` at the frame) to all
+    its segments' interpretation planes: the eigenvector of ``sum w s^2 n n^T`` with the
+    least eigenvalue (``s`` half lengths, ``n`` plane normals). Axes with fewer than
+    :data:`MIN_DIRECTION_SEGMENTS` segments, which cannot tell a direction, count 0."""
+    misfit = 0.0
+    for k in axes:
+        own = labels == k
+        if own.sum() < MIN_DIRECTION_SEGMENTS:
+            continue
+        n, s = normals[own], half[own]
+        residual = s * (n @ directions[:, k])
+        weight = s**2 / (1.0 + (residual / (CAUCHY_FRACTION * inlier_px)) ** 2)
+        alone = np.linalg.eigh((n * weight[:, None]).T @ n)[1][:, 0]
+        cosine = min(1.0, abs(float(alone @ directions[:, k])))
+        misfit = max(misfit, math.degrees(math.acos(cosine)))
+    return misfit
+
+
+def confidence_of(rival: float, focal_degrees: float = 0.0, misfit: float = 0.0) -> float:
     """The probability that the pose is within 2 degrees of the truth (vertical and wall
-    normal): ``1 / (1 + exp(-(w0 + w1 * rival + w2 * focal_degrees)))`` with the weights
-    :data:`CONFIDENCE_WEIGHTS` fitted on real photos (``benchmarks/calibrate_confidence.py``).
-    ``rival``: :attr:`ManhattanFrame.rival`; ``focal_degrees``: how far an estimated focal
-    length's standard deviation turns the pose (:class:`FocalUncertainty`; 0 when given)."""
-    w0, w1, w2 = CONFIDENCE_WEIGHTS
-    return float(1.0 / (1.0 + math.exp(-(w0 + w1 * rival + w2 * focal_degrees))))
+    normal): ``1 / (1 + exp(-(w0 + w1 * rival + w2 * focal_degrees + w3 * misfit)))`` with the
+    weights :data:`CONFIDENCE_WEIGHTS` fitted on real photos
+    (``benchmarks/calibrate_confidence.py``). ``rival``: :attr:`ManhattanFrame.rival`;
+    ``focal_degrees``: how far an estimated focal length's standard deviation turns the pose
+    (:class:`FocalUncertainty`; 0 when given); ``misfit``: how far the vertical's and the wall
+    normal's own segments point from them (:func:`frame_misfit`, degrees)."""
+    w0, w1, w2, w3 = CONFIDENCE_WEIGHTS
+    return float(1.0 / (1.0 + math.exp(-(w0 + w1 * rival + w2 * focal_degrees
+                                         + w3 * misfit))))
 
 
 def confidence_features(estimate: PoseEstimate) -> np.ndarray:
-    """What :func:`confidence_of` weighs, of an estimate: ``rival``, ``focal_degrees``."""
+    """What :func:`confidence_of` weighs, of an estimate: ``rival``, ``focal_degrees``,
+    ``misfit``."""
     uncertainty = estimate.focal_uncertainty
-    return np.array([estimate.rival, 0.0 if uncertainty is None else uncertainty.degrees])
+    return np.array([estimate.rival, 0.0 if uncertainty is None else uncertainty.degrees,
+                     estimate.misfit])
 
 
 def _camera_from_pixel(intrinsics: Intrinsics) -> np.ndarray:
@@ -829,6 +869,8 @@ def _estimate_known_focal(detected: np.ndarray, ideal: np.ndarray, camera: Intri
     except (PoseError, ValueError) as error:
         return _failure(f"no pose: {error}", detected, segments, found, camera.focal, estimated,
                         frame.labels)
+    misfit = frame_misfit(normals, half, frame.directions, frame.labels, inlier_px,
+                          (order[0], order[2]))
     pixel_from_camera = np.linalg.inv(_camera_from_pixel(camera))
     points: list[tuple[float, float] | None] = []
     relabel = -np.ones(len(frame.labels), dtype=int)
@@ -841,7 +883,9 @@ def _estimate_known_focal(detected: np.ndarray, ideal: np.ndarray, camera: Intri
             points.append((float(point[0] / point[2]), float(point[1] / point[2])))
     return PoseEstimate(
         pose, camera.focal, estimated,
-        confidence_of(frame.rival, 0.0 if uncertainty is None else uncertainty.degrees), segments,
+        confidence_of(frame.rival, 0.0 if uncertainty is None else uncertainty.degrees,
+                      misfit), segments,
         int((frame.labels >= 0).sum()), found, tuple(points), world_from_camera, detected,
         relabel, structure=structure, focal_uncertainty=uncertainty, rival=frame.rival,
+        misfit=misfit,
     )
