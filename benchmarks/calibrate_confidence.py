@@ -2,14 +2,19 @@
 is within 2 degrees of the truth (vertical and wall normal), fitted on the York Urban DB's
 training half (``../shared/data/york-urban-train``), with and without the focal length.
 
-The confidence is a logistic function of two measures the estimator makes of each photo
+The confidence is a logistic function of three measures the estimator makes of each photo
 (:func:`gsrwt_cli.api.estimate.confidence_of`): ``rival``, how nearly a different frame
 explains the segments as well as the one chosen (:class:`~gsrwt_cli.api.estimate.
-ManhattanFrame`), and, where the focal length was estimated, how many degrees its standard
-deviation turns the pose (:class:`~gsrwt_cli.api.estimate.FocalUncertainty`). This script
-fits the weights by maximum likelihood (Newton's method, a weak prior against overfitting)
-over the photos the estimator does not refuse, and prints them with the reliability table
-(per confidence bin, the photos and the fraction within 2 degrees) before and after.
+ManhattanFrame`); where the focal length was estimated, how many degrees its standard
+deviation turns the pose (:class:`~gsrwt_cli.api.estimate.FocalUncertainty`); and
+``misfit``, how many degrees the vertical's and the wall normal's own segments, taken alone,
+point from the frame's (:func:`~gsrwt_cli.api.estimate.frame_misfit`). This script fits the
+weights by maximum likelihood (Newton's method, a weak prior against overfitting) over the
+photos the estimator does not refuse, and prints them with the reliability table (per
+confidence bin, the photos and the fraction within 2 degrees) before and after, and the
+two-fold check: the weights fitted on the photos of odd index (in sorted order) judge those
+of even index and the other way round, each fold's accepted and confidently wrong (accepted
+and more than 3 degrees off) per run.
 
     python benchmarks/calibrate_confidence.py [PATH-TO-york-urban-train]
 
@@ -29,15 +34,20 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import bench_real_photos as bench  # noqa: E402
 import real_photos as measure  # noqa: E402
 
-from gsrwt_cli.api.estimate import confidence_features, estimate_pose  # noqa: E402
+from gsrwt_cli.api.estimate import (  # noqa: E402
+    DEFAULT_MIN_CONFIDENCE,
+    confidence_features,
+    estimate_pose,
+)
 from gsrwt_cli.geometry.camera import Intrinsics  # noqa: E402
 
 
-def photo_measures(data: Path) -> list[tuple[str, np.ndarray, bool, float]]:
+def photo_measures(data: Path) -> list[tuple[str, np.ndarray, bool, float, int, bool]]:
     """Per photo and run (focal given, focal estimated) that the estimator does not refuse:
-    the run, its features, whether within 2 degrees on both measures, the old confidence."""
+    the run, its features, whether within 2 degrees on both measures, the old confidence, the
+    photo's index in sorted order, whether more than 3 degrees off on either."""
     rows = []
-    for image, truth in sorted(bench.read_truth(data).items()):
+    for index, (image, truth) in enumerate(sorted(bench.read_truth(data).items())):
         picture = cv2.imread(str(data / "images" / image), cv2.IMREAD_COLOR)
         height, width = picture.shape[:2]
         focal = float(truth["focal_px"])
@@ -52,7 +62,8 @@ def photo_measures(data: Path) -> list[tuple[str, np.ndarray, bool, float]]:
                 measure.directions_from_pose(pose.pan, pose.tilt, pose.roll),
                 bench.true_directions(truth))
             rows.append((run, confidence_features(estimate), measure.is_within(errors),
-                         estimate.confidence))
+                         estimate.confidence, index,
+                         measure.is_confidently_wrong(True, errors)))
     return rows
 
 
@@ -111,6 +122,17 @@ def main() -> None:
         held_out.append(float(1.0 / (1.0 + np.exp(-(w[0] + features[k] @ w[1:])))))
     print("  reliability of the fitted probability (each photo left out of its own fit):")
     print(reliability(held_out, [row[2] for row in rows]))
+    print(f"  two folds (accepted: probability >= {DEFAULT_MIN_CONFIDENCE:g}):")
+    parity = np.array([row[4] % 2 for row in rows])
+    wrong = np.array([row[5] for row in rows])
+    runs = np.array([row[0] for row in rows])
+    for held in (0, 1):
+        w = fit_logistic(features[parity != held], within[parity != held])
+        accepted = 1.0 / (1.0 + np.exp(-(w[0] + features @ w[1:]))) >= DEFAULT_MIN_CONFIDENCE
+        print(f"    held out: {'even' if held == 0 else 'odd'} index: " + "; ".join(
+            f"{run} {int((accepted & (parity == held) & (runs == run)).sum())} accepted, "
+            f"{int((accepted & wrong & (parity == held) & (runs == run)).sum())} "
+            f"confidently wrong" for run in ("focal given", "focal estimated")))
 
 
 if __name__ == "__main__":
