@@ -133,8 +133,9 @@ class PoseEstimate:
     many times better than random frames the frame explains the segments
     (:func:`structure_ratio`); ``focal_uncertainty``: an estimated focal length's
     (:class:`FocalUncertainty`, None when given); ``rival``: :attr:`ManhattanFrame.rival`;
-    ``misfit``: degrees between the frame's vertical or wall normal and the direction its own
-    segments alone meet in (:func:`frame_misfit`).
+    ``misfit``: degrees between the frame's vertical or frontal wall's normal (whichever
+    ``wall`` is reported) and the direction its own segments alone meet in
+    (:func:`frame_misfit`).
     """
 
     pose: Pose | None
@@ -669,7 +670,14 @@ def frame_misfit(normals: np.ndarray, half: np.ndarray, directions: np.ndarray,
     (least squares, the refinement's Cauchy weights of :func:`_refine` at the frame) to all
     its segments' interpretation planes: the eigenvector of ``sum w s^2 n n^T`` with the
     least eigenvalue (``s`` half lengths, ``n`` plane normals). Axes with fewer than
-    :data:`MIN_DIRECTION_SEGMENTS` segments, which cannot tell a direction, count 0."""
+    :data:`MIN_DIRECTION_SEGMENTS` segments, which cannot tell a direction, count 0.
+
+    :func:`estimate_pose` weighs the vertical and the frontal wall's normal (the horizontal
+    nearest the optical axis, whose vanishing point is nearest the image and best pinned
+    down by its segments); the other horizontal, its vanishing point usually far outside the
+    image, is fitted loosely by its own segments (on the York Urban training photos up to 4
+    degrees off where the pose is right), and weighing it too made the confidence no better
+    (docs/REAL_PHOTOS.md)."""
     misfit = 0.0
     for k in axes:
         own = labels == k
@@ -869,8 +877,11 @@ def _estimate_known_focal(detected: np.ndarray, ideal: np.ndarray, camera: Intri
     except (PoseError, ValueError) as error:
         return _failure(f"no pose: {error}", detected, segments, found, camera.focal, estimated,
                         frame.labels)
+    # the vertical and the frontal wall's normal whichever wall is reported: the confidence
+    # is the rotation's, not its naming's
+    frontal = world_from_camera_of(frame.directions)[1]
     misfit = frame_misfit(normals, half, frame.directions, frame.labels, inlier_px,
-                          (order[0], order[2]))
+                          (frontal[0], frontal[2]))
     pixel_from_camera = np.linalg.inv(_camera_from_pixel(camera))
     points: list[tuple[float, float] | None] = []
     relabel = -np.ones(len(frame.labels), dtype=int)
