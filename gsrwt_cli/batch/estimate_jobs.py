@@ -180,6 +180,8 @@ def checked(estimate: PoseEstimate, options: EstimateOptions) -> None:
         if estimate.focal_uncertainty is not None:
             why += (f"; the focal length's uncertainty turns the pose by "
                     f"{estimate.focal_uncertainty.degrees:.1f} deg")
+        why += (f"; the vertical's and the wall's own lines point up to "
+                f"{estimate.misfit:.1f} deg from the fitted frame")
         raise EstimateError(f"confidence {estimate.confidence:.2f} is below the minimum "
                             f"{options.min_confidence:g} ({why})")
 
