@@ -89,7 +89,7 @@ FOCAL_RANGE = (0.2, 10.0)
 FINITE_VP_DIAGONALS = 8.0
 #: Weights of :func:`confidence_of` (intercept, rival, focal degrees, misfit degrees), fitted
 #: by ``benchmarks/calibrate_confidence.py`` on the York Urban training photos.
-CONFIDENCE_WEIGHTS = (10.766, -9.373, -0.479, -1.495)
+CONFIDENCE_WEIGHTS = (8.855, -7.212, -0.484, -0.807)
 #: ``gsrwt estimate`` and ``rectify --auto`` refuse estimates less confident than this: more
 #: likely more than 2 degrees off than not.
 DEFAULT_MIN_CONFIDENCE = 0.5
@@ -657,7 +657,7 @@ def _rotation_of(directions: np.ndarray, vertical: int, along: int, normal: int)
 
 
 def frame_misfit(normals: np.ndarray, half: np.ndarray, directions: np.ndarray,
-                 labels: np.ndarray, inlier_px: float, axes: tuple[int, ...]) -> float:
+                 labels: np.ndarray, axes: tuple[int, ...]) -> float:
     """How far, in degrees, the segments of each of ``axes`` (columns of ``directions``), taken
     alone, point from the frame's axis: the largest angle between an axis and the
     least-squares direction of its own segments.
@@ -666,27 +666,29 @@ def frame_misfit(normals: np.ndarray, half: np.ndarray, directions: np.ndarray,
     length, lens), may not be, and then the frame's vertical and wall normal are a compromise
     between directions that disagree, off by about as much as they disagree (on the York
     Urban photos the labelled segments' own directions are 1.5 to 2.8 degrees from orthogonal
-    where the frame is furthest from the truth). Each axis's direction is the one nearest
-    (least squares, the refinement's Cauchy weights of :func:`_refine` at the frame) to all
-    its segments' interpretation planes: the eigenvector of ``sum w s^2 n n^T`` with the
-    least eigenvalue (``s`` half lengths, ``n`` plane normals). Axes with fewer than
+    where the frame is furthest from the truth). Each axis's direction is the one nearest, in
+    least squares of the refinement's residual ``s * n.v`` (:func:`_refine`, about the
+    end-point distance in pixels), to its segments' interpretation planes: the eigenvector of
+    ``sum s^2 n n^T`` with the least eigenvalue (``s`` half lengths, ``n`` plane normals).
+    The segments are the frame's inliers (within ``inlier_px``), so no outlier weighs; the
+    refinement's Cauchy weights are left out, as taken at the frame they would pull each
+    direction towards it (weighted so, the misfit told the York photos' errors less well).
+    Axes with fewer than
     :data:`MIN_DIRECTION_SEGMENTS` segments, which cannot tell a direction, count 0.
 
     :func:`estimate_pose` weighs the vertical and the frontal wall's normal (the horizontal
     nearest the optical axis, whose vanishing point is nearest the image and best pinned
     down by its segments); the other horizontal, its vanishing point usually far outside the
-    image, is fitted loosely by its own segments (on the York Urban training photos up to 4
-    degrees off where the pose is right), and weighing it too made the confidence no better
-    (docs/REAL_PHOTOS.md)."""
+    image, is fitted loosely by its own segments (on the York Urban training photos up to 8
+    degrees off where the pose is within 2 degrees), and weighing it too made the confidence
+    worse (docs/REAL_PHOTOS.md)."""
     misfit = 0.0
     for k in axes:
         own = labels == k
         if own.sum() < MIN_DIRECTION_SEGMENTS:
             continue
         n, s = normals[own], half[own]
-        residual = s * (n @ directions[:, k])
-        weight = s**2 / (1.0 + (residual / (CAUCHY_FRACTION * inlier_px)) ** 2)
-        alone = np.linalg.eigh((n * weight[:, None]).T @ n)[1][:, 0]
+        alone = np.linalg.eigh((n * (s**2)[:, None]).T @ n)[1][:, 0]
         cosine = min(1.0, abs(float(alone @ directions[:, k])))
         misfit = max(misfit, math.degrees(math.acos(cosine)))
     return misfit
@@ -880,7 +882,7 @@ def _estimate_known_focal(detected: np.ndarray, ideal: np.ndarray, camera: Intri
     # the vertical and the frontal wall's normal whichever wall is reported: the confidence
     # is the rotation's, not its naming's
     frontal = world_from_camera_of(frame.directions)[1]
-    misfit = frame_misfit(normals, half, frame.directions, frame.labels, inlier_px,
+    misfit = frame_misfit(normals, half, frame.directions, frame.labels,
                           (frontal[0], frontal[2]))
     pixel_from_camera = np.linalg.inv(_camera_from_pixel(camera))
     points: list[tuple[float, float] | None] = []

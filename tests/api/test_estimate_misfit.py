@@ -15,7 +15,6 @@ import pytest
 
 from gsrwt_cli.api.estimate import (
     DEFAULT_MIN_CONFIDENCE,
-    INLIER_PX,
     confidence_features,
     confidence_of,
     estimate_pose,
@@ -43,14 +42,14 @@ def test_the_misfit_is_the_angle_between_an_axis_and_where_its_own_segments_meet
                          planes_of(frame[:, 2], 40, rng)])
     labels = np.repeat([0, 1, 2], 40)
     half = rng.uniform(20, 80, len(labels))
-    assert frame_misfit(normals, half, frame, labels, INLIER_PX, (0, 2)) == pytest.approx(
+    assert frame_misfit(normals, half, frame, labels, (0, 2)) == pytest.approx(
         lean, abs=1e-6)
     # the wall's horizontal (axis 1) is not weighed; too few segments cannot tell a direction
-    assert frame_misfit(normals, half, frame, labels, INLIER_PX, (1, 2)) == pytest.approx(
+    assert frame_misfit(normals, half, frame, labels, (1, 2)) == pytest.approx(
         0.0, abs=1e-6)
     few = labels.copy()
     few[4:40] = -1
-    assert frame_misfit(normals, half, frame, few, INLIER_PX, (0, 2)) == pytest.approx(
+    assert frame_misfit(normals, half, frame, few, (0, 2)) == pytest.approx(
         0.0, abs=1e-6)
 
 
@@ -74,7 +73,7 @@ def test_the_confidence_is_the_rotations_whichever_wall_is_reported():
     """A facade seen at 59 degrees (``tests/data/facade``): ``wall="dominant"`` reports the
     facade, ``frontal`` the building's end; the misfit weighs the frontal wall's normal in
     both (the facade's own horizontal edges), so the confidence is the same (the end wall's
-    few edges, taken alone, point 4.3 degrees off: weighed, they refused the facade)."""
+    few edges, taken alone, point 7.5 degrees off: weighed, they would refuse the facade)."""
     image = cv2.imread(str(DATA / "facade" / "building.jpg"), cv2.IMREAD_COLOR)
     frontal = estimate_pose(image, None, wall="frontal")
     dominant = estimate_pose(image, None, wall="dominant")
