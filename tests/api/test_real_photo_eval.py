@@ -244,34 +244,45 @@ def york_runs() -> list[bench_real_photos.RunResult]:
     return bench_real_photos.evaluate(YORK, jobs=1)
 
 
+def accepted_errors(run: bench_real_photos.RunResult) -> tuple[measure.Summary, ...]:
+    """Vertical and wall-normal errors over the photos the run gave a pose."""
+    ok = [p for p in run.photos if p.status == "ok"]
+    return (measure.summarize(p.vertical for p in ok), measure.summarize(p.wall for p in ok))
+
+
 def test_york_with_the_calibrated_focal_length_is_no_worse_than_today(york_runs):
-    """Issue 23, 2026-12-02: vertical 0.52 / 1.59 / 3.41 degrees (median, 90th percentile,
-    worst), wall normal 0.69 / 1.83 / 6.22, none refused, 2 confidently wrong, 45 of 51 within
-    2 degrees on both (before the clutter tie-break: worst 8.20 and 13.47, 4 confidently
-    wrong, 44). Floors a little below: they fail if the estimator gets worse."""
+    """Issue 23, 2026-12-02: vertical 0.52 / 1.94 / 90 degrees (median, 90th percentile,
+    worst; 0.51 / 1.55 / 3.41 over the 50 with a pose), wall normal 0.69 / 1.83 / 90 (0.68 /
+    1.34 / 2.76), 1 refused (P1040822, whose frame's own segments disagree with it: 6.22
+    degrees off the wall), 1 confidently wrong, 45 of 51 within 2 degrees on both (before the
+    confidence weighed the frame's misfit: 2 confidently wrong, none refused; before the
+    clutter tie-break: worst 8.20 and 13.47, 4 confidently wrong, 44). Floors a little below:
+    they fail if the estimator gets worse."""
     run = york_runs[0]
     assert run.name == "calibrated focal" and len(run.photos) == 51
     assert {p.focal_source for p in run.photos} == {"sidecar"}
-    assert run.vertical.median < 0.7 and run.vertical.p90 < 2.0 and run.vertical.worst < 4.5
-    assert run.wall.median < 0.9 and run.wall.p90 < 2.2 and run.wall.worst < 7.0
+    vertical, wall = accepted_errors(run)
+    assert run.vertical.median < 0.7 and run.vertical.p90 < 2.2 and vertical.worst < 4.5
+    assert run.wall.median < 0.9 and run.wall.p90 < 2.2 and wall.worst < 4.5
     assert len(run.refused) <= 2  # at least 95 % of the photos get a pose
-    assert len(run.confidently_wrong) <= 2
+    assert len(run.confidently_wrong) <= 1
     within = sum(measure.is_within(measure.ImageErrors(p.vertical, p.wall))
                  for p in run.photos)
     assert within >= 44
 
 
 def test_york_without_a_focal_length_is_no_worse_than_today(york_runs):
-    """2026-12-02: 8 refused (4 cannot tell the focal length, 4 whose focal length does not
-    pin the pose to 3 degrees), vertical median 0.97, wall median 1.27 degrees, 4 confidently
-    wrong (7 before the refusals), 34 of 51 within 2 degrees on both, the focal length 2.8 %
-    off at the median."""
+    """2026-12-02: 10 refused (5 cannot tell the focal length, 3 whose focal length does not
+    pin the pose to 3 degrees, 2 below the confidence bar), vertical median 0.97, wall median
+    1.27 degrees, 2 confidently wrong (4 before the confidence weighed the frame's misfit, 7
+    before the refusals), 34 of 51 within 2 degrees on both, the focal length 2.5 % off at
+    the median."""
     run = york_runs[1]
     assert run.name.startswith("no focal")
     assert {p.focal_source for p in run.photos} == {"estimated"}
-    assert len(run.refused) <= 10
+    assert len(run.refused) <= 12
     assert run.vertical.median < 1.2 and run.wall.median < 1.5
-    assert len(run.confidently_wrong) <= 4
+    assert len(run.confidently_wrong) <= 2
     assert sum(measure.is_within(measure.ImageErrors(p.vertical, p.wall))
                for p in run.photos) >= 32
     assert run.focal_errors().median < 5.0
@@ -280,10 +291,11 @@ def test_york_without_a_focal_length_is_no_worse_than_today(york_runs):
 def test_york_confidence_is_the_chance_of_being_within_2_degrees(york_runs):
     """The confidence is calibrated (benchmarks/calibrate_confidence.py): over the photos with
     a pose, its mean is the fraction within 2 degrees on both measures, and its Brier score
-    (mean squared difference from 1 within, 0 not) is low. 2026-12-02: mean 0.86 against 0.88
-    within and Brier 0.097 with the focal length; 0.81 against 0.79 and 0.158 without (the old
+    (mean squared difference from 1 within, 0 not) is low. 2026-12-02: mean 0.88 against 0.90
+    within and Brier 0.086 with the focal length; 0.84 against 0.83 and 0.142 without (before
+    the frame's misfit: 0.86 against 0.88, 0.097; 0.81 against 0.79, 0.158; the first
     confidence: 0.92 against 0.86, 0.121; 0.92 against 0.74, 0.218)."""
-    for run, brier in zip(york_runs, (0.11, 0.18)):
+    for run, brier in zip(york_runs, (0.10, 0.16)):
         ok = [p for p in run.photos if p.status == "ok"]
         within = [measure.is_within(measure.ImageErrors(p.vertical, p.wall)) for p in ok]
         confidences = [p.confidence for p in ok]
