@@ -673,8 +673,8 @@ def frame_misfit(normals: np.ndarray, half: np.ndarray, directions: np.ndarray,
     The segments are the frame's inliers (within ``inlier_px``), so no outlier weighs; the
     refinement's Cauchy weights are left out, as taken at the frame they would pull each
     direction towards it (weighted so, the misfit told the York photos' errors less well).
-    Axes with fewer than
-    :data:`MIN_DIRECTION_SEGMENTS` segments, which cannot tell a direction, count 0.
+    Axes with fewer than :data:`MIN_DIRECTION_SEGMENTS` segments, which cannot tell a
+    direction, count 0.
 
     :func:`estimate_pose` weighs the vertical and the frontal wall's normal (the horizontal
     nearest the optical axis, whose vanishing point is nearest the image and best pinned
