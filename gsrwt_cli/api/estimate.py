@@ -17,7 +17,8 @@ Steps (no I/O, nothing printed; arrays in, degrees out):
 4. the vertical (the direction nearest the image's up), the wall (the horizontal nearest the
    optical axis, so ``|pan| <= 45``) and the pose by the decomposition of pan, tilt and roll;
 5. refusals a user can act on (:func:`_refusal`): no clear man-made structure (the frame
-   explains the segments hardly better than random frames, :func:`structure_ratio`), a focal
+   explains the segments hardly better than random frames, :func:`structure_ratio`), no
+   vertical structure (no edge runs along its vertical, :func:`vertical_ratio`), a focal
    length the view does not pin down (:func:`focal_uncertainty`); and the confidence, the
    calibrated chance of being within 2 degrees (:func:`confidence_of`), from how nearly a
    different frame fits as well, how far the focal length's uncertainty turns the pose and how
@@ -98,6 +99,19 @@ RANDOM_FRAMES = 128
 #: A frame must explain this many times the segment length a random frame does (median),
 #: else the image has no man-made structure to tell a pose by (:func:`structure_ratio`).
 MIN_STRUCTURE_RATIO = 4.5
+#: The frame's vertical must gather this many times the segment length a random direction
+#: does (median), else the photo shows no vertical edges and its "vertical" is a guess
+#: (:func:`vertical_ratio`). Set in the gap, on a log scale, between man-made scenes (5.4 at
+#: the least of the York Urban training photos) and photos with straight edges but none
+#: vertical (0.3 to 0.4: a lake at dusk with boats, an orange, given a focal length).
+MIN_VERTICAL_RATIO = 2.0
+#: With a focal length longer than this many times the image's long side, the frame's
+#: structure is judged at this focal length too, and the lower ratio counts
+#: (:func:`_structure_of`): the null model weakens as the focal length grows (every segment's
+#: interpretation plane nearly holds the optical axis, so random frames explain ever less and
+#: any two orientations in the image pass for structure: a painting and a butterfly passed at
+#: 2.5). The York Urban photos, on which :data:`MIN_STRUCTURE_RATIO` was set, are at 1.05.
+STRUCTURE_FOCAL_CAP = 1.25
 #: The Laplace approximation of an estimated focal length's spread (:func:`focal_uncertainty`)
 #: treats the segments as independent; on the York Urban training photos whose frame is right
 #: (vertical within 2 degrees; a wrong frame is the confidence's ``rival`` part) the focal
@@ -389,6 +403,8 @@ def _random_frames(count: int, seed: int = 0) -> np.ndarray:
 
 
 _NULL_FRAMES = _random_frames(RANDOM_FRAMES)
+#: The null frames' axes as directions ``(3 * RANDOM_FRAMES, 3)``, for :func:`vertical_ratio`.
+_NULL_DIRECTIONS = _NULL_FRAMES.transpose(0, 2, 1).reshape(-1, 3)
 
 
 def structure_ratio(normals: np.ndarray, half: np.ndarray, directions: np.ndarray,
@@ -403,6 +419,39 @@ def structure_ratio(normals: np.ndarray, half: np.ndarray, directions: np.ndarra
     """
     frames = np.concatenate([directions[None], _NULL_FRAMES])
     scores = _scores(normals, half, frames, inlier_px)
+    return float(scores[0] / max(np.median(scores[1:]), 1e-12))
+
+
+def _structure_of(ideal: np.ndarray, camera: Intrinsics, normals: np.ndarray, half: np.ndarray,
+                  directions: np.ndarray, inlier_px: float) -> float:
+    """:func:`structure_ratio` of the frame ``directions`` found with ``camera``, and, when its
+    focal length exceeds :data:`STRUCTURE_FOCAL_CAP` long sides, the lower of that and the
+    ratio of a frame found at the cap (the segments ``ideal`` re-seen through it)."""
+    structure = structure_ratio(normals, half, directions, inlier_px)
+    side = float(max(camera.width or 0, camera.height or 0))
+    if side and camera.focal > STRUCTURE_FOCAL_CAP * side:
+        capped = STRUCTURE_FOCAL_CAP * side
+        planes = interpretation_planes(ideal, _camera_from_pixel(
+            Intrinsics(capped, capped, camera.cx, camera.cy)))
+        frame = fit_manhattan_frame(*planes, inlier_px)
+        structure = min(structure, structure_ratio(*planes, frame.directions, inlier_px))
+    return structure
+
+
+def vertical_ratio(normals: np.ndarray, half: np.ndarray, vertical: np.ndarray,
+                   inlier_px: float) -> float:
+    """How much better the segments support the frame's ``vertical`` (a unit direction in the
+    camera frame) than chance: its truncated-quadratic score alone (as :func:`_scores`, over the
+    same longest segments) over the median score of the null frames' axes, each alone.
+
+    :func:`structure_ratio` judges the frame as a whole, and with a focal length given a photo
+    whose straight edges run in one or two horizontal directions only (a lake's shore and its
+    boats, the rim of a fruit) can pass it; its frame's vertical is then whatever direction
+    completes the frame, caught by no edge. A pose needs its vertical seen."""
+    count = min(len(normals), SCORED_SEGMENTS)
+    scaled = normals[:count] * (half[:count, None] / inlier_px)
+    directions = np.vstack([vertical, _NULL_DIRECTIONS])
+    scores = half[:count] @ np.maximum(0.0, 1.0 - (scaled @ directions.T) ** 2)
     return float(scores[0] / max(np.median(scores[1:]), 1e-12))
 
 
@@ -835,12 +884,18 @@ def _focal_of(ideal: np.ndarray, centre: np.ndarray, diagonal: float, side: floa
     return focal
 
 
-def _refusal(structure: float, uncertainty: FocalUncertainty | None) -> str | None:
-    """Why a frame cannot be trusted, in words a user understands, or None."""
+def _refusal(structure: float, uncertainty: FocalUncertainty | None,
+             vertical: float = math.inf) -> str | None:
+    """Why a frame cannot be trusted, in words a user understands, or None; ``vertical``:
+    :func:`vertical_ratio`."""
     if structure < MIN_STRUCTURE_RATIO:
         return (f"no clear man-made structure: the straight segments fit three orthogonal "
                 f"directions only {structure:.1f} times as well as random ones do "
                 f"(need {MIN_STRUCTURE_RATIO:g})")
+    if vertical < MIN_VERTICAL_RATIO:
+        return (f"no vertical structure: the segments along the vertical found fit it only "
+                f"{vertical:.1f} times as well as a random direction (need "
+                f"{MIN_VERTICAL_RATIO:g}); give the pose, or guides (--verticals)")
     if uncertainty is not None and not uncertainty.degrees <= MAX_FOCAL_DEGREES:
         if math.isinf(uncertainty.sigma):
             return ("focal length not determinable from this view: the segments do not pin "
@@ -862,12 +917,15 @@ def _estimate_known_focal(detected: np.ndarray, ideal: np.ndarray, camera: Intri
     support = frame.support()
     needed = max(MIN_DIRECTION_SEGMENTS, math.ceil(MIN_DIRECTION_FRACTION * segments))
     found = int((support >= needed).sum())
-    structure = structure_ratio(normals, half, frame.directions, inlier_px)
+    structure = _structure_of(ideal, camera, normals, half, frame.directions, inlier_px)
     if found < 2:
         return _failure(f"only {found} of 3 directions found, {segments} segments", detected,
                         segments, found, camera.focal, estimated, frame.labels, structure,
                         uncertainty)
-    refusal = _refusal(structure, uncertainty)
+    vertical = vertical_ratio(normals, half,
+                              frame.directions[:, int(np.argmax(np.abs(frame.directions[0])))],
+                              inlier_px)
+    refusal = _refusal(structure, uncertainty, vertical)
     if refusal is not None:
         return _failure(refusal, detected, segments, found, camera.focal, estimated,
                         frame.labels, structure, uncertainty)

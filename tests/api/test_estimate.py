@@ -35,10 +35,11 @@ def errors(estimate: PoseEstimate, truth: np.ndarray) -> tuple[float, float]:
 
 def synthetic_lines(pan: float, tilt: float, roll: float, focal: float, seed: int,
                     noise_px: float = 0.3, outliers: float = 0.2, size=(640, 480),
-                    distortion: np.ndarray | None = None) -> np.ndarray:
-    """Segments along the three world axes in a box in front of the camera, projected by
-    ``cv2.projectPoints`` (OpenCV frames: wall x = Y, y = -X, z = Z), with end-point noise,
-    plus ``outliers`` of random segments."""
+                    distortion: np.ndarray | None = None, axes: tuple[int, ...] = (0, 1, 2)
+                    ) -> np.ndarray:
+    """Segments along the world axes ``axes`` in a box in front of the camera, projected by
+    ``cv2.projectPoints`` (OpenCV frames: wall x = Y, y = -X (the vertical), z = Z), with
+    end-point noise, plus ``outliers`` of random segments."""
     rng = np.random.default_rng(seed)
     w = world_from_camera(pan, tilt, roll)
     camera_from_wall = C.T @ w.T @ C
@@ -46,7 +47,7 @@ def synthetic_lines(pan: float, tilt: float, roll: float, focal: float, seed: in
     matrix = np.array([[focal, 0, (size[0] - 1) / 2], [0, focal, (size[1] - 1) / 2], [0, 0, 1]])
     lines = []
     while len(lines) < 90:
-        axis = len(lines) % 3
+        axis = axes[len(lines) % len(axes)]
         start_camera = np.array([rng.uniform(-3, 3), rng.uniform(-2, 2), rng.uniform(4, 12)])
         start_cv = camera_from_wall.T @ start_camera  # a point in front, in wall coordinates
         direction = np.zeros(3)

@@ -17,11 +17,15 @@ import pytest
 
 from gsrwt_cli.api.estimate import (
     DEFAULT_MIN_CONFIDENCE,
+    INLIER_PX,
     MIN_STRUCTURE_RATIO,
+    MIN_VERTICAL_RATIO,
+    _camera_from_pixel,
     detect_segments,
     estimate_pose,
     interpretation_planes,
     structure_ratio,
+    vertical_ratio,
 )
 from gsrwt_cli.geometry.camera import Intrinsics
 from tests.helpers.cli import run_gsrwt
@@ -33,8 +37,9 @@ YORK = ROOT.parent / "shared" / "data" / "york-urban-train"
 
 #: The reasons a refusal may give, as the user reads them (docs/COMMANDS.md).
 REASONS = ("too few straight segments", "only 1 of 3 directions found",
-           "no clear man-made structure", "focal length not determinable from this view",
-           "cannot tell the focal length", "confidence ")
+           "no clear man-made structure", "no vertical structure",
+           "focal length not determinable from this view", "cannot tell the focal length",
+           "confidence ")
 
 
 def manifest() -> list[dict[str, str]]:
@@ -64,6 +69,45 @@ def test_a_photo_without_man_made_structure_is_refused_with_a_reason(estimated, 
     # the reason says what the photo lacks (not "give the focal length": that would not help)
     assert row["error"].startswith("no clear man-made structure: "), row["error"]
     assert f"Error: {image}: {row['error']}" in stderr
+
+
+@pytest.mark.parametrize("image", must_refuse())
+def test_a_photo_without_man_made_structure_is_refused_given_a_focal_length_too(image):
+    """A phone's photo carries its focal length (EXIF), and with a focal length given the
+    estimator judges the frame at it: at a wide, a normal and a long lens (0.8, 1.6 and 2.5
+    times the long side) none of these photos gets a pose. ``orange.jpg`` did, at the two
+    longer ones (confidence 0.72 and 0.88): its rim fits two horizontal directions, and the
+    frame's vertical, which completes them, caught no edge at all."""
+    pixels = cv2.imread(str(REAL / image), cv2.IMREAD_COLOR)
+    height, width = pixels.shape[:2]
+    for factor in (0.8, 1.6, 2.5, 4.0):
+        focal = factor * max(width, height)
+        estimate = estimate_pose(pixels, Intrinsics(focal, focal, (width - 1) / 2,
+                                                    (height - 1) / 2))
+        assert estimate.error is not None or estimate.confidence < DEFAULT_MIN_CONFIDENCE, (
+            image, factor, estimate.pose, estimate.confidence)
+        assert estimate.error is None or estimate.error.startswith(REASONS), estimate.error
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_a_frame_whose_vertical_no_edge_runs_along_is_refused(seed):
+    """Segments through ``cv2.projectPoints`` along the three axes of a room: the vertical
+    gathers many times what a random direction does. The same room's horizontal edges
+    alone (no vertical edge in view): the frame's vertical is only what completes them, and
+    the estimate is refused as having no vertical structure."""
+    from tests.api.test_estimate import BLANK, synthetic_lines
+
+    camera = Intrinsics(600.0, 600.0, width=640, height=480)
+    room = synthetic_lines(20.0, 10.0, 2.0, 600.0, seed)
+    floor = synthetic_lines(20.0, 10.0, 2.0, 600.0, seed, axes=(0, 2))
+    seen = estimate_pose(BLANK, camera, lines=room)
+    assert seen.error is None and seen.confidence > DEFAULT_MIN_CONFIDENCE
+    unseen = estimate_pose(BLANK, camera, lines=floor)
+    assert unseen.error is not None and unseen.error.startswith("no vertical structure: ")
+    for lines, lowest, highest in ((room, 5.0, np.inf), (floor, -1.0, MIN_VERTICAL_RATIO)):
+        normals, half = interpretation_planes(lines, _camera_from_pixel(camera))
+        vertical = seen.world_from_camera[0]  # the room's vertical, in the camera frame
+        assert lowest < vertical_ratio(normals, half, vertical, INLIER_PX) < highest
 
 
 def test_photos_of_buildings_are_estimated_and_a_curved_page_refused(estimated):
