@@ -17,6 +17,10 @@ horizontal (as lines), median / 90th percentile / worst, an image with no estima
 of ``confidence`` (per bin, the fraction within 2 degrees on both measures); CPU time of the
 subprocess (it and its workers) and wall time, per photo, the program's start included.
 
+Then the photos of other kinds (``tests/data/real``): ``gsrwt estimate`` and ``rectify --auto``
+with no focal length, and ``gsrwt estimate`` given each photo a focal length of
+:data:`FOCAL_FACTORS` times its long side: which of those that must be refused get ``ok``.
+
     python benchmarks/bench_real_photos.py [PATH-TO-york-urban-train] [--json] [--jobs N]
 
 PATH defaults to ``../shared/data/york-urban-train`` beside the repository.
@@ -39,6 +43,7 @@ import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
+import cv2
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -262,6 +267,67 @@ def evaluate_other_photos(folder: Path = OTHER_PHOTOS, jobs: int = 1) -> list[Ot
     return photos
 
 
+#: Focal lengths given to the photos of other kinds, in multiples of each photo's long side: a
+#: phone's wide lens (0.8) to a telephoto (4).
+FOCAL_FACTORS = (0.8, 1.6, 2.5, 4.0)
+
+
+@dataclass
+class GivenFocalRun:
+    """``gsrwt estimate`` over the photos of other kinds, each given ``factor`` times its long
+    side as its focal length (in a sidecar, as a photo's EXIF would give it)."""
+
+    factor: float
+    wrongly_accepted: list[str]
+    planar_ok: list[str]
+
+
+def evaluate_other_photos_given_focal(folder: Path = OTHER_PHOTOS, jobs: int = 1,
+                                      factors: tuple[float, ...] = FOCAL_FACTORS
+                                      ) -> list[GivenFocalRun]:
+    """One run per focal length factor: which photos that must be refused got ``ok``, and
+    which planar ones did."""
+    with open(folder / "photos.csv", newline="") as file:
+        manifest = list(csv.DictReader(file))
+    sides = {}
+    for entry in manifest:
+        height, width = cv2.imread(str(folder / entry["image"]), cv2.IMREAD_UNCHANGED).shape[:2]
+        sides[entry["image"]] = max(width, height)
+    runs = []
+    with tempfile.TemporaryDirectory(prefix="gsrwt-real-focal-") as temporary:
+        scratch = Path(temporary)
+        for factor in factors:
+            sidecar = scratch / f"focal-{factor:g}.csv"
+            with open(sidecar, "w", newline="") as file:
+                writer = csv.writer(file)
+                writer.writerow(["image", "focal"])
+                for image, side in sides.items():
+                    writer.writerow([image, f"{factor * side:.1f}"])
+            rows, _, _ = run_estimate(folder, sidecar, jobs, scratch / f"{factor:g}.csv")
+            status = {Path(row["image"]).name: row["status"] for row in rows}
+            runs.append(GivenFocalRun(
+                factor,
+                [e["image"] for e in manifest
+                 if e["expected"] == "refuse" and status.get(e["image"]) == "ok"],
+                [e["image"] for e in manifest
+                 if e["expected"] == "right" and status.get(e["image"]) == "ok"]))
+    return runs
+
+
+def report_given_focal(runs: list[GivenFocalRun], photos: list[OtherPhoto]) -> str:
+    """The lines of :func:`evaluate_other_photos_given_focal`, as text."""
+    must_refuse = sum(p.expected == "refuse" for p in photos)
+    planar = sum(p.expected == "right" for p in photos)
+    lines = ["the same photos given a focal length (a sidecar, factor x each photo's long "
+             "side, as EXIF would give it):"]
+    for run in runs:
+        wrong = ", ".join(run.wrongly_accepted) or "none"
+        lines.append(f"  {run.factor:3g} x long side: must be refused but ok "
+                     f"{len(run.wrongly_accepted)} of {must_refuse} ({wrong}); planar photos ok "
+                     f"{len(run.planar_ok)} of {planar} ({', '.join(run.planar_ok) or 'none'})")
+    return "\n".join(lines)
+
+
 def report_other_photos(photos: list[OtherPhoto]) -> str:
     """The table of :func:`evaluate_other_photos`, as text."""
     must_refuse = [p for p in photos if p.expected == "refuse"]
@@ -392,14 +458,17 @@ def main() -> None:
                        "images/); give its path as the first argument\n")
     runs = evaluate(data, arguments.jobs)
     others = evaluate_other_photos(OTHER_PHOTOS, arguments.jobs)
+    given_focal = evaluate_other_photos_given_focal(OTHER_PHOTOS, arguments.jobs)
     if arguments.json:
         result = as_json(runs, data, arguments.jobs)
         result["other_photos"] = [asdict(p) for p in others]
+        result["other_photos_given_focal"] = [asdict(run) for run in given_focal]
         print(json.dumps(_no_nan(result), indent=1, allow_nan=False))
     else:
         print(report(runs, data, arguments.jobs))
         print()
         print(report_other_photos(others))
+        print(report_given_focal(given_focal, others))
 
 
 if __name__ == "__main__":
