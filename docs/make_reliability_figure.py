@@ -70,8 +70,10 @@ def marker(canvas: np.ndarray, at: tuple[int, int], shape: str,
 
 
 def draw(result: dict) -> np.ndarray:
-    """The reliability plot and the bins' counts of the benchmark's ``result``."""
-    runs = result["runs"]
+    """The reliability plot and the bins' counts of the benchmark's ``result``: its first two
+    runs, focal length given and none, on which the confidence was fitted (the third, the
+    photos as taken with their EXIF focal length, is in the benchmark's table)."""
+    runs = result["runs"][:len(STYLES)]
     edges = sorted({edge for run in runs for b in run["calibration"] for edge in
                     (b["low"], b["high"])})
     low = min([b["low"] for run in runs for b in run["calibration"] if b["count"]] + [0.5])
