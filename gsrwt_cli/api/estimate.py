@@ -103,7 +103,7 @@ MIN_STRUCTURE_RATIO = 4.5
 #: does (median), else the photo shows no vertical edges and its "vertical" is a guess
 #: (:func:`vertical_ratio`). Set in the gap, on a log scale, between man-made scenes (5.4 at
 #: the least of the York Urban training photos) and photos with straight edges but none
-#: vertical (0.3 to 0.4: a lake at dusk with boats, an orange, given a focal length).
+#: vertical (0.3 to 0.7: a lake at dusk with boats, an orange, given a focal length).
 MIN_VERTICAL_RATIO = 2.0
 #: With a focal length longer than this many times the image's long side, the frame's
 #: structure is judged at this focal length too, and the lower ratio counts
