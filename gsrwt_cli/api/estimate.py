@@ -922,9 +922,10 @@ def _estimate_known_focal(detected: np.ndarray, ideal: np.ndarray, camera: Intri
         return _failure(f"only {found} of 3 directions found, {segments} segments", detected,
                         segments, found, camera.focal, estimated, frame.labels, structure,
                         uncertainty)
-    vertical = vertical_ratio(normals, half,
-                              frame.directions[:, int(np.argmax(np.abs(frame.directions[0])))],
-                              inlier_px)
+    # the vertical and the frontal wall's normal whichever wall is reported: the refusals
+    # and the confidence are the rotation's, not its naming's
+    frontal = world_from_camera_of(frame.directions)[1]
+    vertical = vertical_ratio(normals, half, frame.directions[:, frontal[0]], inlier_px)
     refusal = _refusal(structure, uncertainty, vertical)
     if refusal is not None:
         return _failure(refusal, detected, segments, found, camera.focal, estimated,
@@ -937,9 +938,6 @@ def _estimate_known_focal(detected: np.ndarray, ideal: np.ndarray, camera: Intri
     except (PoseError, ValueError) as error:
         return _failure(f"no pose: {error}", detected, segments, found, camera.focal, estimated,
                         frame.labels)
-    # the vertical and the frontal wall's normal whichever wall is reported: the confidence
-    # is the rotation's, not its naming's
-    frontal = world_from_camera_of(frame.directions)[1]
     misfit = frame_misfit(normals, half, frame.directions, frame.labels,
                           (frontal[0], frontal[2]))
     pixel_from_camera = np.linalg.inv(_camera_from_pixel(camera))
