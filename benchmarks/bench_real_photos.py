@@ -98,10 +98,11 @@ class RunResult:
 
     def focal_errors(self) -> measure.Summary:
         """Relative error of the focal length (percent) over the ok photos whose focal length
-        was estimated."""
+        was estimated, or refined from their EXIF's (``exif+lines``)."""
         return measure.summarize(
             100 * measure.relative_error(p.focal, p.true_focal) for p in self.photos
-            if p.status == "ok" and p.focal_source == "estimated" and p.focal is not None)
+            if p.status == "ok" and p.focal_source in ("estimated", "exif+lines")
+            and p.focal is not None)
 
     def calibration(self) -> list[measure.CalibrationBin]:
         ok = [p for p in self.photos if p.status == "ok" and p.confidence is not None]
@@ -386,7 +387,7 @@ def report(runs: list[RunResult], data: Path, jobs: int) -> str:
     for run in runs:
         focal = run.focal_errors()
         if not math.isnan(focal.median):
-            lines.append(f"focal length error, {run.name} (estimated, ok): median "
+            lines.append(f"focal length error, {run.name} (estimated or refined, ok): median "
                          f"{focal.median:.1f} %, p90 {focal.p90:.1f} %, worst {focal.worst:.1f} %")
     lines += ["", "confidence calibration (status ok): per bin, photos and the fraction within "
               f"{measure.WITHIN_DEG:g} deg on both measures"]

@@ -20,6 +20,7 @@ import numpy as np
 from ..api.estimate import (
     DEFAULT_MIN_CONFIDENCE,
     DIRECTION_NAMES,
+    EXIF_FOCAL_SPREAD,
     WALL_CHOICES,
     EstimateError,
     PoseEstimate,
@@ -125,7 +126,9 @@ def orientation_of(path: Path, options: EstimateOptions) -> int:
 def estimate_file(path: Path, values: Mapping[str, Any], where: str, options: EstimateOptions
                   ) -> tuple[PoseEstimate, Intrinsics | None, str, np.ndarray, dict[str, Any]]:
     """Read ``path`` and estimate its pose: the estimate, the camera it was given (None when
-    the focal length was estimated; with ``--lens-from-lines``'s lens when taken), the focal
+    the focal length was estimated; with ``--lens-from-lines``'s lens when taken; with the
+    focal length the segments refined, source ``exif+lines``, when it came from EXIF and the
+    camera has no lens: :data:`~gsrwt_cli.api.estimate.EXIF_FOCAL_SPREAD`), the focal
     length's source, the decoded image and the lens's columns (:func:`camera_for`; with
     ``--lens-from-lines`` where no lens is given, ``lens_source`` ``lines`` when the lens is
     taken, and ``lines``: the :class:`~gsrwt_cli.api.lens_lines.LinesLens` found)."""
@@ -150,7 +153,14 @@ def estimate_file(path: Path, values: Mapping[str, Any], where: str, options: Es
                 camera = Intrinsics(camera.fx, camera.fy, camera.cx, camera.cy, camera.skew,
                                     camera.width, camera.height, found.lens())
         return estimate, camera, source, image, lens
-    estimate = estimate_pose(image, camera, principal_point=principal_point, wall=options.wall)
+    # an EXIF focal length is a few per cent off: the segments refine it where they pin it
+    spread = EXIF_FOCAL_SPREAD if source == "exif" and camera is not None else 0.0
+    estimate = estimate_pose(image, camera, principal_point=principal_point, wall=options.wall,
+                             focal_spread=spread)
+    if spread and camera is not None and estimate.focal_estimated and estimate.focal:
+        camera = Intrinsics(estimate.focal, estimate.focal, camera.cx, camera.cy, camera.skew,
+                            camera.width, camera.height, camera.lens)
+        source = "exif+lines"
     return estimate, camera, source, image, lens
 
 

@@ -28,7 +28,7 @@ VIDEO_COLUMNS = (RECTIFY_COLUMNS[0], "frame", "time", *RECTIFY_COLUMNS[1:])
 
 #: Where a rectify row's focal length and pose came from (``focal_source``, ``pose_source``),
 #: and the statuses of its rows.
-FOCAL_SOURCES = ("option", "sidecar", "camera", "exif", "estimated")
+FOCAL_SOURCES = ("option", "sidecar", "camera", "exif", "exif+lines", "estimated")
 POSE_SOURCES = ("sidecar", "yaml", "options", "estimated")
 RECTIFY_STATUSES = ("ok", "skipped", "error", "interrupted", "planned")
 #: Where a rectify row's lens came from (``lens_source``): lens columns of a sidecar row, the

@@ -17,6 +17,7 @@ import pytest
 
 from gsrwt_cli.api.estimate import (
     DEFAULT_MIN_CONFIDENCE,
+    EXIF_FOCAL_SPREAD,
     INLIER_PX,
     MIN_STRUCTURE_RATIO,
     MIN_VERTICAL_RATIO,
@@ -77,16 +78,20 @@ def test_a_photo_without_man_made_structure_is_refused_given_a_focal_length_too(
     estimator judges the frame at it: at a wide, a normal and a long lens (0.8, 1.6 and 2.5
     times the long side) none of these photos gets a pose. ``orange.jpg`` did, at the two
     longer ones (confidence 0.72 and 0.88): its rim fits two horizontal directions, and the
-    frame's vertical, which completes them, caught no edge at all."""
+    frame's vertical, which completes them, caught no edge at all. Each focal length is tried
+    as given (exact) and as an EXIF one is taken (approximate, refined by the segments where
+    they pin it: ``focal_spread``)."""
     pixels = cv2.imread(str(REAL / image), cv2.IMREAD_COLOR)
     height, width = pixels.shape[:2]
     for factor in (0.8, 1.6, 2.5, 4.0):
         focal = factor * max(width, height)
-        estimate = estimate_pose(pixels, Intrinsics(focal, focal, (width - 1) / 2,
-                                                    (height - 1) / 2))
-        assert estimate.error is not None or estimate.confidence < DEFAULT_MIN_CONFIDENCE, (
-            image, factor, estimate.pose, estimate.confidence)
-        assert estimate.error is None or estimate.error.startswith(REASONS), estimate.error
+        for spread in (0.0, EXIF_FOCAL_SPREAD):
+            estimate = estimate_pose(pixels, Intrinsics(focal, focal, (width - 1) / 2,
+                                                        (height - 1) / 2), focal_spread=spread)
+            assert estimate.error is not None or (
+                estimate.confidence < DEFAULT_MIN_CONFIDENCE), (
+                image, factor, spread, estimate.pose, estimate.confidence)
+            assert estimate.error is None or estimate.error.startswith(REASONS), estimate.error
 
 
 @pytest.mark.parametrize("seed", [0, 1])
