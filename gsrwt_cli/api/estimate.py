@@ -100,6 +100,10 @@ FINITE_VP_DIAGONALS = 8.0
 #: hand-labelled directions of the York Urban training photos, each fitted alone, meet at 90
 #: degrees give or take 0.6 at the median, 2.0 at the 90th percentile, over 149 pairs.)
 MAX_SKEW_DEGREES = 3.0
+#: :func:`reconcile_directions` trusts no direction closer than this variance (radians
+#: squared: 0.001 degrees), so that segments with no noise at all (made, not photographed)
+#: weigh finitely.
+MIN_DIRECTION_VARIANCE = math.radians(0.001) ** 2
 #: The skews :func:`reconcile_directions` weighs, in degrees: none, and 0.05 to
 #: :data:`MAX_SKEW_DEGREES` in equal ratios.
 SKEW_GRID_DEGREES = np.concatenate([[0.0], np.geomspace(0.05, MAX_SKEW_DEGREES, 36)])
@@ -566,8 +570,8 @@ def reconcile_directions(normals: np.ndarray, half: np.ndarray, directions: np.n
             fitted[:, k] = vectors[:, 0] * np.sign(vectors[:, 0] @ fitted[:, k] or 1.0)
             if iteration == iterations:  # the last pass weighs the directions it settled on
                 spread = (cauchy @ r**2) / max(cauchy.sum() - 2.0, 1.0)
-                alone.append(_Alone(k, fitted[:, k].copy(), vectors[:, 1:].T,
-                                    spread / np.maximum(values[1:], 1e-12)))
+                alone.append(_Alone(k, fitted[:, k].copy(), vectors[:, 1:].T, np.maximum(
+                    spread / np.maximum(values[1:], 1e-12), MIN_DIRECTION_VARIANCE)))
     if len(alone) < 2:
         return directions
     skew_variances = np.radians(SKEW_GRID_DEGREES) ** 2
@@ -750,6 +754,8 @@ def focal_uncertainty(ideal: np.ndarray, centre: np.ndarray, focal: float, inlie
     if not curvature > 0:
         return FocalUncertainty(math.inf, math.inf)
     sigma = FOCAL_SIGMA_SCALE / math.sqrt(curvature)
+    if not sigma < 1.0:  # e times either way: nothing pinned (and no camera to try there)
+        return FocalUncertainty(sigma, math.inf)
     reference, order = world_from_camera_of(at)
     degrees = 0.0
     for sign in (-1.0, 1.0):
@@ -1000,16 +1006,16 @@ def _refined_focal(ideal: np.ndarray, camera: Intrinsics, spread: float, inlier_
     refined by the segments: the focal length they fit best near it (:func:`polish_focal`)
     with its uncertainty (:func:`focal_uncertainty`), and the given one, averaged in log by
     their inverse variances (the posterior of a normal prior and a normal likelihood). Where
-    the segments do not pin it (the fit's cost does not curve around it) the given one
-    stands, and the pose does not hang on it. The uncertainty returned is the posterior's,
-    its turn of the pose scaled to it."""
+    the segments do not pin it (the fit's cost does not curve around it, or hardly: a
+    standard deviation of a factor e or more) the given one stands, trusted as a given one is.
+    The uncertainty returned is the posterior's, its turn of the pose scaled to it."""
     given = camera.focal
     centre = np.array([camera.cx, camera.cy], dtype=np.float64)
     prior = 1.0 / spread**2
     found = polish_focal(ideal, centre, given, inlier_px)
     measured = focal_uncertainty(ideal, centre, found, inlier_px)
-    if not (math.isfinite(measured.sigma) and measured.sigma > 0):
-        return camera, FocalUncertainty(spread, 0.0)  # the pose does not hang on it
+    if not (math.isfinite(measured.degrees) and measured.sigma > 0):
+        return camera, FocalUncertainty(spread, 0.0)  # nothing to refine it by
     likelihood = 1.0 / measured.sigma**2
     focal = math.exp((likelihood * math.log(found) + prior * math.log(given))
                      / (likelihood + prior))
@@ -1066,7 +1072,7 @@ def _refusal(structure: float, uncertainty: FocalUncertainty | None,
                 f"{vertical:.1f} times as well as a random direction (need "
                 f"{MIN_VERTICAL_RATIO:g}); give the pose, or guides (--verticals)")
     if uncertainty is not None and not uncertainty.degrees <= MAX_FOCAL_DEGREES:
-        if math.isinf(uncertainty.sigma):
+        if math.isinf(uncertainty.degrees):
             return ("focal length not determinable from this view: the segments do not pin "
                     "it down; give the focal length")
         return (f"focal length not determinable from this view: +-"

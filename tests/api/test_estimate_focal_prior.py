@@ -5,7 +5,9 @@ a camera whose focal length the estimator is told 8 % wrong."""
 from __future__ import annotations
 
 import math
+import warnings
 
+import numpy as np
 import pytest
 
 from gsrwt_cli.api.estimate import EXIF_FOCAL_SPREAD, estimate_pose
@@ -55,3 +57,43 @@ def test_a_frontal_view_keeps_the_focal_length_it_was_told():
     assert abs(refined.focal / (1.08 * TRUE_FOCAL) - 1) < 0.01
     assert max(errors(refined, world_from_camera(1.0, 1.0, 0.5))) < 0.5
     assert math.isfinite(refined.focal_uncertainty.sigma)
+
+
+def degenerate_segments(kind: str) -> np.ndarray:
+    """Segments a camera would hardly give: noise-free ones of a scene, one direction only,
+    two directions crossing (full-height verticals and full-width horizontals, repeated), three
+    segments repeated with zero-length ones among them."""
+    rng = np.random.default_rng(1)
+    if kind == "noise-free":
+        return synthetic_lines(30.0, 12.0, 2.0, TRUE_FOCAL, 0, noise_px=0.0, outliers=0.0)
+    x = rng.uniform(0, 640, 60)
+    if kind == "one direction":
+        return np.c_[x, rng.uniform(0, 200, 60), x + rng.normal(0, 0.5, 60),
+                     rng.uniform(250, 480, 60)]
+    if kind == "two directions":
+        lines = np.c_[x, np.full(60, 10.0), x, np.full(60, 400.0)]
+        lines[::2] = np.c_[np.full(30, 10.0), x[::2] / 2, np.full(30, 600.0), x[::2] / 2]
+        return lines
+    lines = np.repeat(rng.uniform(0, 640, (3, 4)), 20, axis=0)
+    lines[:5, 2:] = lines[:5, :2]
+    return lines
+
+
+@pytest.mark.parametrize("kind", ["noise-free", "one direction", "two directions", "repeated"])
+@pytest.mark.parametrize("spread", [0.0, EXIF_FOCAL_SPREAD])
+def test_degenerate_segments_give_a_pose_or_a_reason_and_no_warning(kind, spread):
+    """Found by fuzzing: noise-free segments divided by a zero variance in the reconciling,
+    and two crossing directions gave the focal length's uncertainty a spread so wide that a
+    camera of focal length 0 was tried (an exception)."""
+    lines = degenerate_segments(kind)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        estimate = estimate_pose(BLANK, told(1.08 * TRUE_FOCAL), lines=lines,
+                                 focal_spread=spread)
+    if estimate.ok:
+        assert np.isfinite([estimate.pose.pan, estimate.pose.tilt, estimate.pose.roll,
+                            estimate.confidence, estimate.focal]).all()
+    else:
+        assert estimate.error
+    if kind == "noise-free":
+        assert estimate.ok and estimate.confidence > 0.5
