@@ -49,7 +49,7 @@ import cv2
 import numpy as np
 
 from ..geometry.camera import Intrinsics, Pose
-from ..geometry.rotations import PoseError, pose_from_rotation
+from ..geometry.rotations import PoseError, cross_matrix, pose_from_rotation
 from ..vision.edges import grey8
 
 #: Segments shorter than this fraction of the image's diagonal are left out (noise, texture).
@@ -616,8 +616,7 @@ def _nearest_rotation(rotation: np.ndarray, alone: list[_Alone],
         for a in alone:
             d = a.axis_of(rotation)
             residual = a.across @ (d - a.direction)
-            jacobian = -a.across @ np.array([[0.0, -d[2], d[1]], [d[2], 0.0, -d[0]],
-                                             [-d[1], d[0], 0.0]])  # d(w x d)/dw = -[d]x
+            jacobian = -a.across @ cross_matrix(d)  # d(w x d)/dw = -[d]x
             weighted = jacobian.T / (a.variances + skew_variance)
             normal_matrix += weighted @ jacobian
             gradient += weighted @ residual

@@ -310,7 +310,7 @@ def world_from_camera_from_ros_body(world_from_body: ArrayLike) -> Matrix:
 # --------------------------------------------------------------------------------------------
 
 
-def _cross_matrix(v: Vector) -> Matrix:
+def cross_matrix(v: Vector) -> Matrix:
     """``[v]_x``, the matrix with ``[v]_x @ u == cross(v, u)``."""
     return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
 
@@ -326,7 +326,7 @@ def rotation_from_rvec(rvec: ArrayLike) -> Matrix:
     """
     r = _vector3("rvec", rvec)
     theta = float(np.linalg.norm(r))
-    a = _cross_matrix(r)
+    a = cross_matrix(r)
     sin_over_theta = float(np.sinc(theta / math.pi))  # numpy's sinc(x) = sin(pi x)/(pi x)
     half = float(np.sinc(theta / (2.0 * math.pi)))
     one_minus_cos_over_theta2 = 0.5 * half * half
