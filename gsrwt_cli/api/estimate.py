@@ -49,7 +49,7 @@ import cv2
 import numpy as np
 
 from ..geometry.camera import Intrinsics, Pose
-from ..geometry.rotations import PoseError, cross_matrix, pose_from_rotation
+from ..geometry.rotations import PoseError, cross_matrix, cross_rows, pose_from_rotation
 from ..vision.edges import grey8
 
 #: Segments shorter than this fraction of the image's diagonal are left out (noise, texture).
@@ -251,7 +251,7 @@ def interpretation_planes(
     ones = np.ones((len(lines), 1))
     r1 = np.hstack([lines[:, :2], ones]) @ camera_from_pixel.T
     r2 = np.hstack([lines[:, 2:], ones]) @ camera_from_pixel.T
-    normals = np.cross(r1, r2)
+    normals = cross_rows(r1, r2)
     norms = np.linalg.norm(normals, axis=1, keepdims=True)
     half = 0.5 * np.hypot(lines[:, 2] - lines[:, 0], lines[:, 3] - lines[:, 1])
     return normals / np.where(norms > 0, norms, 1.0), half
@@ -265,6 +265,20 @@ def interpretation_planes(
 def _unit(vectors: np.ndarray) -> np.ndarray:
     norms = np.linalg.norm(vectors, axis=-1, keepdims=True)
     return vectors / np.where(norms > 0, norms, 1.0)
+
+
+def _least_of_three(distance: np.ndarray) -> np.ndarray:
+    """``distance.min(axis=-1)`` of an array whose last axis holds three values (the three
+    directions), element-wise: numpy reduces a length-3 axis several times slower."""
+    return np.minimum(np.minimum(distance[..., 0], distance[..., 1]), distance[..., 2])
+
+
+def _nearest_of_three(distance: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(distance.argmin(axis=1), distance.min(axis=1))`` of an ``(N, 3)`` array, the first
+    index among equals, as :func:`_least_of_three`."""
+    least = _least_of_three(distance)
+    index = np.where(distance[:, 0] == least, 0, np.where(distance[:, 1] == least, 1, 2))
+    return index, least
 
 
 def _rodrigues(omega: np.ndarray) -> np.ndarray:
@@ -314,9 +328,9 @@ def fit_manhattan_frame(
     pool = min(count, SAMPLED_SEGMENTS)
     weights = half_lengths[:pool] / half_lengths[:pool].sum()
     picks = rng.choice(pool, size=(hypotheses, 3), p=weights)
-    v1 = _unit(np.cross(normals[picks[:, 0]], normals[picks[:, 1]]))
-    v2 = _unit(np.cross(v1, normals[picks[:, 2]]))
-    v3 = np.cross(v1, v2)
+    v1 = _unit(cross_rows(normals[picks[:, 0]], normals[picks[:, 1]]))
+    v2 = _unit(cross_rows(v1, normals[picks[:, 2]]))
+    v3 = cross_rows(v1, v2)
     good = (np.linalg.norm(v2, axis=1) > 0.5) & (picks[:, 0] != picks[:, 1])
     candidates = np.stack([v1, v2, v3], axis=2)[good]  # (H, 3, 3): columns are directions
     if len(candidates) == 0:
@@ -370,7 +384,7 @@ def _most_upright_of_the_best(normals: np.ndarray, half: np.ndarray, candidates:
     if len(frames) == 1:
         return frames[0]
     distance = np.abs(np.einsum("ij,kjl->kil", normals, np.stack(frames)))  # (K, N, 3)
-    distance = distance.min(axis=2) * (half / inlier_px)
+    distance = _least_of_three(distance) * (half / inlier_px)
     share = half * np.maximum(0.0, 1.0 - distance**2)  # (K, N): each segment's score
     totals = share.sum(axis=1)
     best = int(np.argmax(totals))
@@ -399,7 +413,7 @@ def _scores(normals: np.ndarray, half: np.ndarray, candidates: np.ndarray,
     for start in range(0, len(candidates), 500):  # bounded memory: N x 500 x 3 at a time
         block = candidates[start:start + 500].astype(np.float32)
         flat = block.transpose(1, 0, 2).reshape(3, -1)  # (3, h*3)
-        distance = np.abs(scaled @ flat).reshape(count, len(block), 3).min(axis=2)
+        distance = _least_of_three(np.abs(scaled @ flat).reshape(count, len(block), 3))
         np.square(distance, out=distance)
         np.subtract(1.0, distance, out=distance)
         np.maximum(distance, 0.0, out=distance)
@@ -410,8 +424,7 @@ def _scores(normals: np.ndarray, half: np.ndarray, candidates: np.ndarray,
 def _labels(normals: np.ndarray, half: np.ndarray, directions: np.ndarray,
             inlier_px: float) -> tuple[np.ndarray, float]:
     distance = np.abs(normals @ directions) * half[:, None] / inlier_px
-    labels = np.argmin(distance, axis=1)
-    nearest = distance[np.arange(len(labels)), labels]
+    labels, nearest = _nearest_of_three(distance)
     score = float((half * np.maximum(0.0, 1.0 - nearest**2)).sum())
     return np.where(nearest < 1.0, labels, -1), score
 
@@ -486,30 +499,39 @@ def _refine(normals: np.ndarray, half: np.ndarray, directions: np.ndarray,
             fixed_labels: np.ndarray | None = None) -> np.ndarray:
     """Gauss-Newton on the rotation: residual ``half * n.v_k`` (about the end-point distance
     in pixels) of each inlier, Cauchy-weighted, the rotation updated as ``exp([w]x) R``.
-    Inliers are re-assigned each iteration, unless ``fixed_labels`` gives them."""
+    Inliers are re-assigned each iteration, unless ``fixed_labels`` gives them.
+
+    The residual's derivative is ``s (v x n)``, so the normal equations gather per direction:
+    ``J^T W J = sum_k [v_k]x M_k [v_k]x^T`` and ``J^T W r = sum_k [v_k]x M_k v_k`` with
+    ``M_k = sum c s^2 n n^T`` over direction ``k``'s inliers (``c`` Cauchy weights), each
+    ``M_k`` one product of the weights with the segments' outer products ``n n^T``."""
     left, _, right = np.linalg.svd(directions)
     directions = left @ right
+    outer = (normals[:, :, None] * normals[:, None, :]).reshape(len(normals), 9)
+    squared = half**2
+    if fixed_labels is not None:
+        labels, inliers = np.maximum(fixed_labels, 0), fixed_labels >= 0
+        if inliers.sum() < 3:
+            return directions
     for iteration in range(iterations):
+        distance = np.abs(normals @ directions) * half[:, None]
         if fixed_labels is None:
             gate = inlier_px * (2.0 if iteration < 2 else 1.0)
-            distance = np.abs(normals @ directions) * half[:, None]
-            labels = np.argmin(distance, axis=1)
-            inliers = distance.min(axis=1) < gate
+            labels, nearest = _nearest_of_three(distance)
+            inliers = nearest < gate
+            if inliers.sum() < 3:
+                break
         else:
-            labels, inliers = np.maximum(fixed_labels, 0), fixed_labels >= 0
-        if inliers.sum() < 3:
-            break
-        n, k, s = normals[inliers], labels[inliers], half[inliers]
-        v = directions[:, k].T  # (M, 3)
-        residual = s * np.einsum("ij,ij->i", n, v)
-        jacobian = s[:, None] * np.column_stack([  # v x n, without np.cross's overhead
-            v[:, 1] * n[:, 2] - v[:, 2] * n[:, 1], v[:, 2] * n[:, 0] - v[:, 0] * n[:, 2],
-            v[:, 0] * n[:, 1] - v[:, 1] * n[:, 0]])
-        weight = 1.0 / (1.0 + (residual / (CAUCHY_FRACTION * inlier_px)) ** 2)
-        normal_matrix = (jacobian * weight[:, None]).T @ jacobian
+            nearest = distance[np.arange(len(labels)), labels]
+        weight = np.where(inliers, squared / (1.0 + (nearest / (CAUCHY_FRACTION * inlier_px))
+                                                 ** 2), 0.0)
+        by_direction = (labels[:, None] == np.arange(3)) * weight[:, None]  # (N, 3)
+        moments = (by_direction.T @ outer).reshape(3, 3, 3)  # M_k
+        turns = cross_matrix(directions.T)  # [v_k]x, (3, 3, 3)
+        normal_matrix = (turns @ moments @ turns.transpose(0, 2, 1)).sum(axis=0)
+        gradient = (turns @ (moments @ directions.T[:, :, None])).sum(axis=0)[:, 0]
         damping = 1e-6 * np.trace(normal_matrix) + 1e-12
-        step = np.linalg.solve(normal_matrix + damping * np.eye(3),
-                               -(jacobian * weight[:, None]).T @ residual)
+        step = np.linalg.solve(normal_matrix + damping * np.eye(3), -gradient)
         directions = _rodrigues(step) @ directions
         if np.linalg.norm(step) < 1e-9:
             break
@@ -552,24 +574,28 @@ def reconcile_directions(normals: np.ndarray, half: np.ndarray, directions: np.n
     fitted = directions.copy()
     gate = 2.0 * inlier_px
     alone: list[_Alone] = []
+    outer = (normals[:, :, None] * normals[:, None, :]).reshape(len(normals), 9)
     for iteration in range(iterations + 1):
         distance = np.abs(normals @ fitted) * half[:, None]
-        nearest = np.argmin(distance, axis=1)
-        residual = distance[np.arange(len(nearest)), nearest]
+        nearest, residual = _nearest_of_three(distance)
+        own = (nearest[:, None] == np.arange(3)) & (residual < gate)[:, None]  # (N, 3)
+        cauchy = 1.0 / (1.0 + (residual / (CAUCHY_FRACTION * inlier_px)) ** 2)
+        # each direction's sum c s^2 n n^T, and its eigenvectors, all three at once
+        all_values, all_vectors = np.linalg.eigh(
+            ((own * (cauchy * half**2)[:, None]).T @ outer).reshape(3, 3, 3))
+        counts = own.sum(axis=0)
         for k in range(3):
-            own = (nearest == k) & (residual < gate)
-            if own.sum() < MIN_DIRECTION_SEGMENTS:
+            values, vectors = all_values[k], all_vectors[k]
+            if counts[k] < MIN_DIRECTION_SEGMENTS:
                 fitted[:, k] = directions[:, k]
                 continue
-            n, r = normals[own], residual[own]
-            cauchy = 1.0 / (1.0 + (r / (CAUCHY_FRACTION * inlier_px)) ** 2)
-            values, vectors = np.linalg.eigh((n * (cauchy * half[own] ** 2)[:, None]).T @ n)
             if abs(vectors[:, 0] @ directions[:, k]) < math.cos(math.radians(MAX_SKEW_DEGREES)):
                 fitted[:, k] = directions[:, k]  # it found other segments, not a skew
                 continue
             fitted[:, k] = vectors[:, 0] * np.sign(vectors[:, 0] @ fitted[:, k] or 1.0)
             if iteration == iterations:  # the last pass weighs the directions it settled on
-                spread = (cauchy @ r**2) / max(cauchy.sum() - 2.0, 1.0)
+                c = cauchy[own[:, k]]
+                spread = (c @ residual[own[:, k]] ** 2) / max(c.sum() - 2.0, 1.0)
                 alone.append(_Alone(k, fitted[:, k].copy(), vectors[:, 1:].T, np.maximum(
                     spread / np.maximum(values[1:], 1e-12), MIN_DIRECTION_VARIANCE)))
     if len(alone) < 2:
@@ -636,7 +662,7 @@ def _image_cost(lines: np.ndarray, pixel_from_camera: np.ndarray, directions: np
     segments = lines[inliers]
     points = (pixel_from_camera @ directions[:, labels[inliers]]).T  # homogeneous VPs
     mid = np.column_stack([(segments[:, :2] + segments[:, 2:]) / 2, np.ones(len(segments))])
-    through = np.cross(mid, points)
+    through = cross_rows(mid, points)
     through /= np.maximum(np.hypot(through[:, 0], through[:, 1]), 1e-300)[:, None]
     distance = np.abs(through[:, 0] * segments[:, 0] + through[:, 1] * segments[:, 1]
                       + through[:, 2])
@@ -653,7 +679,7 @@ def image_score(lines: np.ndarray, pixel_from_camera: np.ndarray, directions: np
     mid = np.column_stack([(lines[:, :2] + lines[:, 2:]) / 2, np.ones(len(lines))])
     best = np.full(len(lines), np.inf)
     for k in range(3):
-        through = np.cross(mid, points[:, k])
+        through = cross_rows(mid, points[:, k])
         through /= np.maximum(np.hypot(through[:, 0], through[:, 1]), 1e-300)[:, None]
         distance = np.abs(through[:, 0] * lines[:, 0] + through[:, 1] * lines[:, 1]
                           + through[:, 2])
@@ -777,7 +803,7 @@ def cluster_vanishing_point(lines: np.ndarray, centre: np.ndarray, scale: float)
     ones = np.ones((len(lines), 1))
     p1 = np.hstack([(lines[:, :2] - centre) / scale, ones])
     p2 = np.hstack([(lines[:, 2:] - centre) / scale, ones])
-    homogeneous = np.cross(p1, p2)
+    homogeneous = cross_rows(p1, p2)
     homogeneous /= np.linalg.norm(homogeneous[:, :2], axis=1, keepdims=True)
     lengths = np.hypot(lines[:, 2] - lines[:, 0], lines[:, 3] - lines[:, 1])
     point = np.linalg.svd(homogeneous * np.sqrt(lengths)[:, None])[2][-1]
@@ -840,7 +866,7 @@ def _rotation_of(directions: np.ndarray, vertical: int, along: int, normal: int)
     """Rows up, wall-right (``into x up``), into-wall from three columns of ``directions``."""
     up = directions[:, vertical] * np.sign(directions[0, vertical] or 1.0)
     into = directions[:, normal] * np.sign(directions[2, normal] or 1.0)
-    right = np.cross(into, up)
+    right = cross_rows(into, up)
     u, _, vt = np.linalg.svd(np.vstack([up, right, into]))
     return u @ vt
 

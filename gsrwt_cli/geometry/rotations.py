@@ -310,9 +310,25 @@ def world_from_camera_from_ros_body(world_from_body: ArrayLike) -> Matrix:
 # --------------------------------------------------------------------------------------------
 
 
-def cross_matrix(v: Vector) -> Matrix:
-    """``[v]_x``, the matrix with ``[v]_x @ u == cross(v, u)``."""
-    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
+def cross_matrix(v: ArrayLike) -> np.ndarray:
+    """``[v]_x``, the matrix with ``[v]_x @ u == cross(v, u)``; of vectors ``(..., 3)``, the
+    matrices ``(..., 3, 3)``."""
+    v = np.asarray(v, dtype=np.float64)
+    matrix = np.zeros(v.shape + (3,))
+    matrix[..., 0, 1], matrix[..., 0, 2] = -v[..., 2], v[..., 1]
+    matrix[..., 1, 0], matrix[..., 1, 2] = v[..., 2], -v[..., 0]
+    matrix[..., 2, 0], matrix[..., 2, 1] = -v[..., 1], v[..., 0]
+    return matrix
+
+
+def cross_rows(a: ArrayLike, b: ArrayLike) -> np.ndarray:
+    """``np.cross(a, b)`` of vectors along the last axis (broadcast), the same products and
+    differences written out: numpy's own moves axes about, several times slower on the
+    short arrays of an estimate."""
+    a, b = np.asarray(a), np.asarray(b)
+    return np.stack([a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1],
+                     a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2],
+                     a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]], axis=-1)
 
 
 def rotation_from_rvec(rvec: ArrayLike) -> Matrix:

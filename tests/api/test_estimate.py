@@ -208,3 +208,18 @@ def test_the_sample_views_known_poses(row):
         normal = min(normal, angle_between(estimate.world_from_camera[2], truth[1]))
     assert normal < 0.3
     assert estimate.confidence > 0.5
+
+
+def test_the_nearest_of_three_directions_is_numpys_argmin_and_min():
+    """The estimator's element-wise nearest direction (the first among equals, as
+    ``np.argmin``), on distances with ties, zeros and infinities."""
+    from gsrwt_cli.api.estimate import _least_of_three, _nearest_of_three
+
+    rng = np.random.default_rng(1)
+    distance = rng.integers(0, 4, size=(400, 3)).astype(float)  # many ties
+    distance[::7, 1] = np.inf
+    labels, nearest = _nearest_of_three(distance)
+    assert np.array_equal(labels, np.argmin(distance, axis=1))
+    assert np.array_equal(nearest, distance.min(axis=1))
+    stacked = rng.random((5, 40, 3))
+    assert np.array_equal(_least_of_three(stacked), stacked.min(axis=2))

@@ -22,6 +22,8 @@ from gsrwt_cli.geometry.rotations import (
     THESIS_FROM_OPENCV,
     Pose,
     PoseError,
+    cross_matrix,
+    cross_rows,
     distance_from_tvec,
     opencv_from_world_from_camera,
     pose_from_quaternion,
@@ -682,3 +684,21 @@ def test_recorded_real_poses_convert_both_ways():
             distance = distance_from_tvec(rvec, tvec)
             if row.get("distance"):
                 assert float(row["distance"]) == pytest.approx(distance, rel=1e-4)
+
+
+@settings(max_examples=50, deadline=None)
+@given(st.lists(st.floats(-10, 10), min_size=6, max_size=6))
+def test_cross_products_written_out_are_numpys(values):
+    """``cross_rows`` and ``cross_matrix`` (single and batched) against numpy's ``np.cross``,
+    within rounding: the estimator's fast paths compute the same products."""
+    vectors = np.array(values).reshape(2, 3)
+    rows = np.random.default_rng(0).normal(size=(5, 3)) * 3.0
+    assert np.allclose(cross_rows(vectors[0], vectors[1]), np.cross(vectors[0], vectors[1]),
+                       atol=1e-9)
+    assert np.allclose(cross_rows(rows, vectors[1]), np.cross(rows, vectors[1]), atol=1e-9)
+    assert np.allclose(cross_matrix(vectors[0]) @ vectors[1], np.cross(vectors[0], vectors[1]),
+                       atol=1e-9)
+    batched = cross_matrix(rows)
+    assert batched.shape == (5, 3, 3)
+    assert np.allclose(batched @ vectors[1], np.cross(rows, vectors[1]), atol=1e-9)
+    assert np.allclose(batched, -batched.transpose(0, 2, 1))
