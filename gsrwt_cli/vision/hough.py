@@ -411,7 +411,7 @@ def _segments(
     """
     voter_distance = max(HOUGH_VOTER_DISTANCE, 0.5 * rho_step)
     free = np.ones(voters.x.size, bool)
-    lines: list[Line] = []
+    pieces: list[_Piece] = []
     for peak_cell in peak_cells:  # a loop over candidate lines
         peak_theta_bin, peak_rho_bin = divmod(int(peak_cell), rho_bin_count)
         cell_theta = math.radians(peak_theta_bin * theta_step_deg)
@@ -452,19 +452,37 @@ def _segments(
             pixels = support.near(theta, rho, first - 2.0, last + 2.0, voter_distance + 2.0,
                                   peak_theta_bin)
             members = nearby[(voter_along >= first - 3.0) & (voter_along <= last + 3.0)]
-            line = _piece(theta, rho, cell_theta, first, last, voters, members, pixels,
-                          voter_distance, free, gradient, measured)
-            if line is not None and line.length >= min_length - 1e-9:
-                lines.append(line)
-    return lines
+            piece = _piece(theta, rho, cell_theta, first, last, voters, members, pixels,
+                           voter_distance, free, gradient)
+            if piece is not None:
+                pieces.append(piece)
+    return [line for line in _finished(pieces, gradient, measured)
+            if line.length >= min_length - 1e-9]
+
+
+@dataclass(frozen=True)
+class _Piece:
+    """A segment as :func:`_piece` fitted it, before its ends are finished
+    (:func:`_finished`): its line ``(theta, rho)`` radians and pixels (``cos``, ``sin`` of
+    ``theta``), its first and last voters along it, their number, their median magnitude
+    (``contrast``) and gradient across the line (``strength``)."""
+
+    theta: float
+    rho: float
+    cos: float
+    sin: float
+    first: float
+    last: float
+    votes: int
+    contrast: float
+    strength: float
 
 
 def _piece(
     theta: float, rho: float, cell_theta: float, first: float, last: float, voters: _Pixels,
     members: np.ndarray, pixels: tuple[np.ndarray, np.ndarray, np.ndarray],
     voter_distance: float, free: np.ndarray, gradient: np.ndarray | None = None,
-    measured: np.ndarray | None = None,
-) -> Line | None:
+) -> _Piece | None:
     """One segment between ``first`` and ``last`` along the line ``(theta, rho)``.
 
     Refitted twice on the support ``pixels`` within ``voter_distance`` of the line and between
@@ -473,11 +491,8 @@ def _piece(
     between its two pixel columns). Its ends are its first and last free voters (of
     ``members``) within :data:`PIECE_VOTER_DISTANCE` of the refitted line, projected onto it;
     they are then taken (marked in ``free``). None if they are fewer than :data:`MIN_FILL`
-    per pixel of its length. With the raw ``gradient``, each end then moves outward by whole
-    pixels (at most :data:`MAX_END_EXTENSION`) while the gradient across the line, sampled
-    on it, keeps half the median strength of its voters, with their polarity; with the
-    ``measured`` pixels, each end then moves inward until it lies on one
-    (:func:`_measured_ends`).
+    per pixel of its length. With the raw ``gradient``, its strength: the median gradient
+    across the line of its voters (:func:`_finished` moves its ends by it).
     """
     sx, sy, sw = pixels
     for _ in range(2):
@@ -494,23 +509,39 @@ def _piece(
     members, along = members[keep], along[keep]
     if members.size < max(2.0, MIN_FILL * (last - first)):
         return None
-    first, last = float(along.min()), float(along.max())
     free[members] = False
     c, s = math.cos(theta), math.sin(theta)
+    strength = 0.0
     if gradient is not None:
         cols, rows = voters.x[members].astype(np.int64), voters.y[members].astype(np.int64)
         strength = _median(gradient[0, rows, cols] * c + gradient[1, rows, cols] * s)
-        if strength > 0:
-            before, after = _extensions(gradient, theta, rho, first, last, strength)
-            first, last = first - before, last + after
+    return _Piece(float(theta), float(rho), c, s, float(along.min()), float(along.max()),
+                  int(members.size), _median(voters.weight[members]), strength)
+
+
+def _finished(pieces: list[_Piece], gradient: np.ndarray | None,
+              measured: np.ndarray | None) -> list[Line]:
+    """The pieces as lines, their ends finished, all pieces at once: with the raw
+    ``gradient``, each end of a piece of positive strength moves outward by whole pixels (at
+    most :data:`MAX_END_EXTENSION`) while the gradient across the line, sampled on it, keeps
+    half the piece's strength, with its polarity (:func:`_extensions`); with the
+    ``measured`` pixels, each end then moves inward until it lies on one
+    (:func:`_measured_ends`)."""
+    if not pieces:
+        return []
+    theta, rho, c, s, first, last, strength = (np.array(values, dtype=np.float64) for values in
+                                               zip(*[(p.theta, p.rho, p.cos, p.sin, p.first,
+                                                      p.last, p.strength) for p in pieces]))
+    if gradient is not None:
+        before, after = _extensions(gradient, rho, c, s, first, last, strength)
+        first, last = first - before, last + after
     if measured is not None:
-        first, last = _measured_ends(measured, theta, rho, first, last)
-    return Line(
-        rho=float(rho), theta_deg=math.degrees(theta) % 360.0, votes=int(members.size),
-        x1=rho * c - first * s, y1=rho * s + first * c,
-        x2=rho * c - last * s, y2=rho * s + last * c,
-        length=last - first, contrast=_median(voters.weight[members]),
-    )
+        first, last = _measured_ends(measured, rho, c, s, first, last)
+    return [Line(rho=p.rho, theta_deg=math.degrees(p.theta) % 360.0, votes=p.votes,
+                 x1=p.rho * p.cos - a * p.sin, y1=p.rho * p.sin + a * p.cos,
+                 x2=p.rho * p.cos - b * p.sin, y2=p.rho * p.sin + b * p.cos,
+                 length=b - a, contrast=p.contrast)
+            for p, a, b in zip(pieces, first.tolist(), last.tolist())]
 
 
 def _stands_out(magnitude: np.ndarray, measured: np.ndarray | None, theta: float, rho: float,
@@ -544,38 +575,42 @@ def _stands_out(magnitude: np.ndarray, measured: np.ndarray | None, theta: float
     return strength > 0 and strength >= margin * surround
 
 
-def _measured_ends(measured: np.ndarray, theta: float, rho: float, first: float,
-                   last: float) -> tuple[float, float]:
-    """The ends ``first`` and ``last`` along the line ``(theta, rho)`` moved inward, by
-    half pixels and at most :data:`PIECE_VOTER_DISTANCE` + 1 px, until each lies on a
-    ``measured`` pixel: an end projected from an edge pixel beside the line may fall outside
-    the image or on the fill."""
-    c, s = math.cos(theta), math.sin(theta)
+def _measured_ends(measured: np.ndarray, rho: np.ndarray, c: np.ndarray, s: np.ndarray,
+                   first: np.ndarray, last: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The ends ``first`` and ``last`` along the lines ``rho`` (normals ``(c, s)``; arrays,
+    one entry a line) moved inward, by half pixels and at most :data:`PIECE_VOTER_DISTANCE`
+    + 1 px, until each lies on a ``measured`` pixel: an end projected from an edge pixel
+    beside the line may fall outside the image or on the fill."""
     inward = np.arange(0.0, PIECE_VOTER_DISTANCE + 1.25, 0.5)
-    along = np.concatenate([first + inward, last - inward])
-    cols = np.rint(rho * c - along * s).astype(np.int64)
-    rows = np.rint(rho * s + along * c).astype(np.int64)
+    along = np.concatenate([first[:, None] + inward, last[:, None] - inward], axis=1)
+    cols = np.rint((rho * c)[:, None] - along * s[:, None]).astype(np.int64)
+    rows = np.rint((rho * s)[:, None] + along * c[:, None]).astype(np.int64)
     height, width = measured.shape
     inside = (cols >= 0) & (cols < width) & (rows >= 0) & (rows < height)
-    on = (inside & measured[np.where(inside, rows, 0), np.where(inside, cols, 0)]).reshape(2, -1)
-    steps = np.where(on.any(axis=1), on.argmax(axis=1), 0)
-    return first + float(inward[steps[0]]), last - float(inward[steps[1]])
+    on = (inside & measured[np.where(inside, rows, 0), np.where(inside, cols, 0)]).reshape(
+        len(rho), 2, -1)
+    steps = np.where(on.any(axis=2), on.argmax(axis=2), 0)
+    return first + inward[steps[:, 0]], last - inward[steps[:, 1]]
 
 
-def _extensions(gradient: np.ndarray, theta: float, rho: float, first: float, last: float,
-                strength: float) -> tuple[int, int]:
-    """Whole pixels by which a segment's ends ``first`` and ``last`` (along its line) may move
-    outward: how many of the points 1, 2, .. :data:`MAX_END_EXTENSION` px beyond each have a
-    gradient across the line (bilinear in the raw ``gradient``) of at least half
-    ``strength``, counted from the end until the first that has not."""
-    c, s = math.cos(theta), math.sin(theta)
+def _extensions(gradient: np.ndarray, rho: np.ndarray, c: np.ndarray, s: np.ndarray,
+                first: np.ndarray, last: np.ndarray, strength: np.ndarray
+                ) -> tuple[np.ndarray, np.ndarray]:
+    """Whole pixels by which the ends ``first`` and ``last`` of segments along the lines
+    ``rho`` (normals ``(c, s)``; arrays, one entry a segment) may move outward: how many of
+    the points 1, 2, .. :data:`MAX_END_EXTENSION` px beyond each have a gradient across the
+    line (bilinear in the raw ``gradient``) of at least half ``strength``, counted from the
+    end until the first that has not; none where ``strength`` is not positive."""
     step = np.arange(1, MAX_END_EXTENSION + 1, dtype=np.float64)
-    along = np.concatenate([first - step, last + step])
-    x, y = rho * c - along * s, rho * s + along * c
-    sampled = _bilinear(gradient, x, y)  # (2, points)
-    weak = (sampled[0] * c + sampled[1] * s < 0.5 * strength).reshape(2, -1)
-    counts = np.where(weak.any(axis=1), weak.argmax(axis=1), MAX_END_EXTENSION)
-    return int(counts[0]), int(counts[1])
+    along = np.concatenate([first[:, None] - step, last[:, None] + step], axis=1)
+    x = (rho * c)[:, None] - along * s[:, None]
+    y = (rho * s)[:, None] + along * c[:, None]
+    sampled = _bilinear(gradient, x.ravel(), y.ravel()).reshape(2, *x.shape)
+    weak = (sampled[0] * c[:, None] + sampled[1] * s[:, None]
+            < 0.5 * strength[:, None]).reshape(len(rho), 2, -1)
+    counts = np.where(weak.any(axis=2), weak.argmax(axis=2), MAX_END_EXTENSION)
+    counts[~(strength > 0)] = 0
+    return counts[:, 0].astype(np.float64), counts[:, 1].astype(np.float64)
 
 
 def _bilinear(values: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray:
