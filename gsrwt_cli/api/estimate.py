@@ -239,6 +239,16 @@ def detect_segments(image: np.ndarray, min_length: float | None = None) -> np.nd
     return lines[order]
 
 
+def _usable_segments(lines: np.ndarray) -> np.ndarray:
+    """Segments given as ``(N, 4)`` ``col1, row1, col2, row2``, those of no length or with a
+    coordinate that is not finite left out: they have no direction (LSD gives none such)."""
+    lines = np.asarray(lines, dtype=np.float64)
+    if lines.ndim != 2 or lines.shape[1] != 4:
+        raise ValueError(f"segments must be an (N, 4) array, got shape {lines.shape}")
+    length = np.hypot(lines[:, 2] - lines[:, 0], lines[:, 3] - lines[:, 1])
+    return lines[np.all(np.isfinite(lines), axis=1) & (length > 0)]
+
+
 def interpretation_planes(
     lines: np.ndarray, camera_from_pixel: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -980,7 +990,7 @@ def estimate_pose(
             (camera.width, camera.height) != (width, height)):
         raise ValueError(f"the camera is {camera.width}x{camera.height} pixels but the image "
                          f"is {width}x{height}")
-    detected = detect_segments(image) if lines is None else np.asarray(lines, dtype=np.float64)
+    detected = detect_segments(image) if lines is None else _usable_segments(lines)
     segments = len(detected)
     if segments < MIN_SEGMENTS:
         return _failure(f"too few straight segments: {segments} (need {MIN_SEGMENTS})",

@@ -97,3 +97,35 @@ def test_degenerate_segments_give_a_pose_or_a_reason_and_no_warning(kind, spread
         assert estimate.error
     if kind == "noise-free":
         assert estimate.ok and estimate.confidence > 0.5
+
+
+@pytest.mark.parametrize("kind", ["noise-free", "one direction", "two directions", "repeated"])
+def test_degenerate_segments_without_a_focal_length_give_a_pose_or_a_reason(kind):
+    """Found by fuzzing: with no focal length, zero-length segments (``repeated``) made the
+    vanishing points' least squares divide by zero, and its SVD failed (an exception)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        estimate = estimate_pose(BLANK, None, lines=degenerate_segments(kind))
+    if estimate.ok:
+        assert np.isfinite([estimate.pose.pan, estimate.pose.tilt, estimate.pose.roll,
+                            estimate.confidence, estimate.focal]).all()
+    else:
+        assert estimate.error
+
+
+def test_segments_of_no_length_or_not_finite_are_left_out():
+    """Given segments with zero-length and non-finite ones among them estimate as the rest do;
+    a wrongly shaped array is a ValueError."""
+    lines = degenerate_segments("noise-free")
+    spoilt = np.vstack([lines, [[5.0, 5.0, 5.0, 5.0], [np.nan, 1.0, 2.0, 3.0],
+                                [1.0, np.inf, 2.0, 3.0]] * 3])
+    clean = estimate_pose(BLANK, None, lines=lines)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        given = estimate_pose(BLANK, None, lines=spoilt)
+    assert clean.ok and given.ok
+    assert given.segments == clean.segments == len(lines)
+    assert abs(given.focal / clean.focal - 1) < 1e-9
+    assert abs(given.pose.pan - clean.pose.pan) < 1e-9
+    with pytest.raises(ValueError, match=r"\(N, 4\)"):
+        estimate_pose(BLANK, None, lines=lines[:, :3])
