@@ -336,7 +336,10 @@ def fit_manhattan_frame(
     count = len(normals)
     rng = np.random.default_rng(seed)
     pool = min(count, SAMPLED_SEGMENTS)
-    weights = half_lengths[:pool] / half_lengths[:pool].sum()
+    pooled = float(half_lengths[:pool].sum())
+    if not pooled > 0:  # no segment of any length (all beyond a lens's fold, say)
+        return ManhattanFrame(np.eye(3), -np.ones(count, dtype=int), 0.0)
+    weights = half_lengths[:pool] / pooled
     picks = rng.choice(pool, size=(hypotheses, 3), p=weights)
     v1 = _unit(cross_rows(normals[picks[:, 0]], normals[picks[:, 1]]))
     v2 = _unit(cross_rows(v1, normals[picks[:, 2]]))
