@@ -8,6 +8,7 @@ columns ``gsrwt rectify --sidecar`` reads) followed by what the estimate says of
 
 from __future__ import annotations
 
+import math
 import multiprocessing
 import warnings
 from collections.abc import Callable, Mapping
@@ -228,10 +229,15 @@ def camera_used(estimate: PoseEstimate, camera: Intrinsics | None, width: int, h
 
 
 def estimate_row(estimate: PoseEstimate, source: str) -> dict[str, Any]:
-    """The columns of an estimate other than its sidecar values."""
+    """The columns of an estimate other than its sidecar values; ``focal_sd`` where the
+    segments estimated or refined the focal length: its standard deviation as a fraction of
+    it (that of its logarithm, :class:`~gsrwt_cli.api.estimate.FocalUncertainty`)."""
     row: dict[str, Any] = {"confidence": round(estimate.confidence, 4),
                            "segments": estimate.segments, "inliers": estimate.inliers,
                            "focal_source": source}
+    spread = estimate.focal_uncertainty
+    if spread is not None and math.isfinite(spread.sigma):
+        row["focal_sd"] = round(spread.sigma, 4)
     for name, point in zip(DIRECTION_NAMES, estimate.vanishing_points):
         if point is not None:
             row[f"vp_{name}_col"], row[f"vp_{name}_row"] = point

@@ -118,8 +118,9 @@ def estimate(inputs: tuple[str, ...], output: str | None, fmt: str | None, recur
 
     Writes one sidecar row per image: image, pan, tilt, roll, focal, cx, cy, width,
     height (what 'gsrwt rectify --sidecar' reads), then confidence, segments, inliers,
-    focal_source, aspect and aspect_source, the three vanishing points in pixels, status and
-    error. With --lens-from-lines also lens_source, distortion_model and k1 (the lens the
+    focal_source, focal_sd (an estimated or refined focal length's standard deviation, a
+    fraction of it), aspect and aspect_source, the three vanishing points in pixels, status
+    and error. With --lens-from-lines also lens_source, distortion_model and k1 (the lens the
     lines gave, which 'rectify --sidecar' reads back) and lens_lines (the evidence, or why
     the lens was refused). Images that cannot tell their pose get status error and no
     pose. With guides (--corners, --verticals, --horizontals) the pose is the one they

@@ -50,11 +50,13 @@ METADATA_VALUES = ("kept", "none", "stripped", "damaged", "unsupported")
 #: ``DIRECTION_NAMES``).
 VANISHING_DIRECTIONS = ("vertical", "wall", "normal")
 
-#: ``gsrwt estimate``: a sidecar row of the estimated camera, and the evidence (``aspect``,
+#: ``gsrwt estimate``: a sidecar row of the estimated camera, and the evidence (``focal_sd``:
+#: an estimated or refined focal length's standard deviation, a fraction of it; ``aspect``,
 #: ``aspect_source``: the rectangle of ``--corners``, ``given`` or ``estimated``).
 ESTIMATE_COLUMNS = (
     "image", "pan", "tilt", "roll", "focal", "fx", "fy", "cx", "cy", "width", "height",
-    "confidence", "segments", "inliers", "focal_source", "aspect", "aspect_source", "corners",
+    "confidence", "segments", "inliers", "focal_source", "focal_sd", "aspect", "aspect_source",
+    "corners",
     *(f"vp_{name}_{axis}" for name in VANISHING_DIRECTIONS for axis in ("col", "row")),
     "status", "error",
 )

@@ -58,3 +58,28 @@ def test_an_exif_focal_length_off_by_7_percent_is_refined_by_the_lines(tmp_path)
     assert rectified["focal_source"] == "exif+lines"
     assert float(rectified["focal_px"]) == float(row["focal"])
     assert (tmp_path / "out" / "room.jpg").is_file()
+
+
+def test_the_table_says_how_sure_a_refined_or_estimated_focal_length_is(tmp_path):
+    """``focal_sd``: refined from EXIF's (taken as 5 % uncertain), the focal length is surer
+    than EXIF's, and the true one lies within 3 of its standard deviations; estimated from
+    the lines alone it is less sure than refined; given, it has none."""
+    photo = tmp_path / "room.jpg"
+    exif_photo(photo, 28.0, 10.0, 2.0)
+    rows = {}
+    for name, extra in (("refined", ()), ("given", ("--focal", str(TRUE_FOCAL)))):
+        result = run_gsrwt("estimate", str(photo), "-f", "csv", *extra)
+        assert result.returncode == 0, result.stderr
+        (rows[name],) = read_table(result.stdout)
+    bare = tmp_path / "bare.png"  # no EXIF: the focal length from the lines alone
+    cv2.imwrite(str(bare), cv2.imread(str(photo)))
+    result = run_gsrwt("estimate", str(bare), "-f", "csv")
+    assert result.returncode == 0, result.stderr
+    (rows["estimated"],) = read_table(result.stdout)
+    assert rows["estimated"]["focal_source"] == "estimated"
+    refined_sd, estimated_sd = float(rows["refined"]["focal_sd"]), float(
+        rows["estimated"]["focal_sd"])
+    assert 0 < refined_sd < 0.05
+    assert refined_sd < estimated_sd
+    assert abs(math.log(float(rows["refined"]["focal"]) / TRUE_FOCAL)) < 3 * refined_sd
+    assert rows["given"]["focal_sd"] in ("", None)
