@@ -291,6 +291,12 @@ def _nearest_of_three(distance: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return index, least
 
 
+def _outer_products(normals: np.ndarray) -> np.ndarray:
+    """Each plane normal's ``n n^T``, flattened: ``(N, 9)``; a weighted sum over segments,
+    ``sum w n n^T``, is then one product ``w @ outer``."""
+    return (normals[:, :, None] * normals[:, None, :]).reshape(len(normals), 9)
+
+
 def _rodrigues(omega: np.ndarray) -> np.ndarray:
     return cv2.Rodrigues(np.asarray(omega, dtype=np.float64).reshape(3, 1))[0]
 
@@ -520,7 +526,7 @@ def _refine(normals: np.ndarray, half: np.ndarray, directions: np.ndarray,
     ``M_k`` one product of the weights with the segments' outer products ``n n^T``."""
     left, _, right = np.linalg.svd(directions)
     directions = left @ right
-    outer = (normals[:, :, None] * normals[:, None, :]).reshape(len(normals), 9)
+    outer = _outer_products(normals)
     squared = half**2
     if fixed_labels is not None:
         labels, inliers = np.maximum(fixed_labels, 0), fixed_labels >= 0
@@ -587,7 +593,7 @@ def reconcile_directions(normals: np.ndarray, half: np.ndarray, directions: np.n
     fitted = directions.copy()
     gate = 2.0 * inlier_px
     alone: list[_Alone] = []
-    outer = (normals[:, :, None] * normals[:, None, :]).reshape(len(normals), 9)
+    outer = _outer_products(normals)
     for iteration in range(iterations + 1):
         distance = np.abs(normals @ fitted) * half[:, None]
         nearest, residual = _nearest_of_three(distance)

@@ -463,14 +463,12 @@ def _segments(
 @dataclass(frozen=True)
 class _Piece:
     """A segment as :func:`_piece` fitted it, before its ends are finished
-    (:func:`_finished`): its line ``(theta, rho)`` radians and pixels (``cos``, ``sin`` of
-    ``theta``), its first and last voters along it, their number, their median magnitude
+    (:func:`_finished`): its line ``(theta, rho)`` radians and pixels, its first and last
+    voters along it, their number, their median magnitude
     (``contrast``) and gradient across the line (``strength``)."""
 
     theta: float
     rho: float
-    cos: float
-    sin: float
     first: float
     last: float
     votes: int
@@ -515,7 +513,7 @@ def _piece(
     if gradient is not None:
         cols, rows = voters.x[members].astype(np.int64), voters.y[members].astype(np.int64)
         strength = _median(gradient[0, rows, cols] * c + gradient[1, rows, cols] * s)
-    return _Piece(float(theta), float(rho), c, s, float(along.min()), float(along.max()),
+    return _Piece(float(theta), float(rho), float(along.min()), float(along.max()),
                   int(members.size), _median(voters.weight[members]), strength)
 
 
@@ -529,19 +527,19 @@ def _finished(pieces: list[_Piece], gradient: np.ndarray | None,
     (:func:`_measured_ends`)."""
     if not pieces:
         return []
-    theta, rho, c, s, first, last, strength = (np.array(values, dtype=np.float64) for values in
-                                               zip(*[(p.theta, p.rho, p.cos, p.sin, p.first,
-                                                      p.last, p.strength) for p in pieces]))
+    turns = [(math.cos(p.theta), math.sin(p.theta)) for p in pieces]
+    rho, c, s, first, last, strength = (np.array(values, dtype=np.float64) for values in zip(
+        *[(p.rho, cos, sin, p.first, p.last, p.strength) for p, (cos, sin) in zip(pieces, turns)]))
     if gradient is not None:
         before, after = _extensions(gradient, rho, c, s, first, last, strength)
         first, last = first - before, last + after
     if measured is not None:
         first, last = _measured_ends(measured, rho, c, s, first, last)
     return [Line(rho=p.rho, theta_deg=math.degrees(p.theta) % 360.0, votes=p.votes,
-                 x1=p.rho * p.cos - a * p.sin, y1=p.rho * p.sin + a * p.cos,
-                 x2=p.rho * p.cos - b * p.sin, y2=p.rho * p.sin + b * p.cos,
+                 x1=p.rho * cos - a * sin, y1=p.rho * sin + a * cos,
+                 x2=p.rho * cos - b * sin, y2=p.rho * sin + b * cos,
                  length=b - a, contrast=p.contrast)
-            for p, a, b in zip(pieces, first.tolist(), last.tolist())]
+            for p, (cos, sin), a, b in zip(pieces, turns, first.tolist(), last.tolist())]
 
 
 def _stands_out(magnitude: np.ndarray, measured: np.ndarray | None, theta: float, rho: float,

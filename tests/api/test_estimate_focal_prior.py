@@ -117,8 +117,8 @@ def test_segments_of_no_length_or_not_finite_are_left_out():
     """Given segments with zero-length and non-finite ones among them estimate as the rest do;
     a wrongly shaped array is a ValueError."""
     lines = degenerate_segments("noise-free")
-    spoilt = np.vstack([lines, [[5.0, 5.0, 5.0, 5.0], [np.nan, 1.0, 2.0, 3.0],
-                                [1.0, np.inf, 2.0, 3.0]] * 3])
+    bad = [[5.0, 5.0, 5.0, 5.0], [np.nan, 1.0, 2.0, 3.0], [1.0, np.inf, 2.0, 3.0]] * 3
+    spoilt = np.vstack([bad, lines, bad])  # before the good ones and after them
     clean = estimate_pose(BLANK, None, lines=lines)
     with warnings.catch_warnings():
         warnings.simplefilter("error")
