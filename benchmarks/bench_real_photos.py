@@ -23,8 +23,17 @@ the estimate alone in this process (:func:`estimate_cpu_ms`).
 Then the photos of other kinds (``tests/data/real``): ``gsrwt estimate`` and ``rectify --auto``
 with no focal length, and ``gsrwt estimate`` given each photo a focal length of
 :data:`FOCAL_FACTORS` times its long side: which of those that must be refused get ``ok``.
+Last, OpenCV's chessboard photos (``tests/data/right*.jpg``), their calibration given: each
+board's plane taken as the wall and measured against its pose (:func:`evaluate_chessboards`).
 
     python benchmarks/bench_real_photos.py [PATH-TO-york-urban-train] [--json] [--jobs N]
+        [--two-directions]
+    python benchmarks/bench_real_photos.py --survey FOLDER [--long-side 640]
+
+``--two-directions`` adds the York photos seen with one horizontal direction's edges left out
+(:func:`evaluate_two_directions`): views of a wall about frontally, and of a corridor.
+``--survey FOLDER`` only estimates every photo of a folder nobody measured
+(:func:`survey_photos`), to look for photos that get a pose they should not.
 
 PATH defaults to ``../shared/data/york-urban-train`` beside the repository.
 """
@@ -55,6 +64,9 @@ import real_photos as measure  # noqa: E402
 REPOSITORY = Path(__file__).resolve().parent.parent
 DEFAULT_DATA = REPOSITORY.parent / "shared" / "data" / "york-urban-train"
 OTHER_PHOTOS = REPOSITORY / "tests" / "data" / "real"
+#: OpenCV's chessboard photos, their camera and their poses (``cv2.solvePnP`` of the corners):
+#: ``tests/data/README.md``.
+BOARDS = REPOSITORY / "tests" / "data"
 GSRWT = Path(sys.executable).with_name("gsrwt")
 
 
@@ -143,13 +155,17 @@ def strip_exif(jpeg: bytes) -> bytes:
     return b"".join(kept)
 
 
-def run_estimate(images: Path, sidecar: Path | None, jobs: int, output: Path
-                 ) -> tuple[list[dict[str, str]], float, float]:
-    """``gsrwt estimate IMAGES [--sidecar S] -o OUTPUT``: its rows, the CPU seconds of the
-    subprocess and its workers, and the wall seconds."""
-    command = [str(GSRWT), "estimate", str(images), "-o", str(output), "-j", str(jobs), "-q"]
+def run_estimate(images: Path | list[Path], sidecar: Path | None, jobs: int, output: Path,
+                 camera: Path | None = None) -> tuple[list[dict[str, str]], float, float]:
+    """``gsrwt estimate IMAGES [--sidecar S] [--camera C] -o OUTPUT``: its rows, the CPU seconds
+    of the subprocess and its workers, and the wall seconds."""
+    paths = images if isinstance(images, list) else [images]
+    command = [str(GSRWT), "estimate", *map(str, paths), "-o", str(output), "-j", str(jobs),
+               "-q"]
     if sidecar is not None:
         command += ["--sidecar", str(sidecar)]
+    if camera is not None:
+        command += ["--camera", str(camera)]
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     start = time.perf_counter()
     done = subprocess.run(command, capture_output=True, text=True)
@@ -241,6 +257,65 @@ def estimate_cpu_ms(data: Path, passes: int = IN_PROCESS_PASSES) -> float:
             estimate_pose(pixels, camera)
         quickest = min(quickest, time.process_time() - start)
     return 1000 * quickest / len(photos)
+
+
+#: :func:`evaluate_two_directions`: a detected segment within this many pixels (end-point
+#: distance) of a true direction's vanishing line is taken for one of its edges, and left out.
+LEFT_OUT_PX = 3.0
+
+
+def evaluate_two_directions(data: Path) -> list[RunResult]:
+    """The York photos seen with one horizontal direction's edges gone, in this process: the
+    segments ``gsrwt estimate`` detects, less those along the true wall normal (a wall seen
+    about frontally: its verticals and horizontals only), or less those along the other true
+    horizontal (a corridor: its verticals and the edges receding from the camera); then the
+    estimate with the calibrated focal length and principal point. Views the photos do not
+    show as a whole, made of their real edges (:func:`measure.along_direction`)."""
+    from gsrwt_cli.api.estimate import DEFAULT_MIN_CONFIDENCE, detect_segments, estimate_pose
+    from gsrwt_cli.geometry.camera import Intrinsics
+
+    cv2.setNumThreads(1)
+    runs = []
+    truth = read_truth(data)
+    for name, dropped in (("frontal wall (no receding edges)", "wall"),
+                          ("vertical and receding edges only", "side")):
+        photos = []
+        for image, row in truth.items():
+            pixels = cv2.imread(str(data / "images" / image))
+            height, width = pixels.shape[:2]
+            focal, cx, cy = (float(row[key]) for key in ("focal_px", "cx", "cy"))
+            lines = detect_segments(pixels)
+            truth_directions = true_directions(row)
+            matrix = np.array([[focal, 0, cx], [0, focal, cy], [0, 0, 1.0]])
+            kept = lines[~measure.along_direction(
+                lines, matrix, getattr(truth_directions, dropped), LEFT_OUT_PX)]
+            estimate = estimate_pose(pixels, Intrinsics(focal, focal, cx, cy, width=width,
+                                                        height=height), lines=kept)
+            ok = estimate.error is None and estimate.confidence >= DEFAULT_MIN_CONFIDENCE
+            errors = measure.image_errors(
+                measure.directions_from_pose(estimate.pose.pan, estimate.pose.tilt,
+                                             estimate.pose.roll) if ok else None,
+                truth_directions)
+            photos.append(PhotoResult(image, "ok" if ok else "error", estimate.confidence,
+                                      focal, "sidecar", focal, errors.vertical, errors.wall,
+                                      estimate.error or ""))
+        runs.append(RunResult(name, photos, 0.0, 0.0))
+    return runs
+
+
+def report_two_directions(runs: list[RunResult]) -> str:
+    """The lines of :func:`evaluate_two_directions`, as text."""
+    lines = ["York photos with one horizontal direction's edges left out (in process, "
+             "calibrated focal):"]
+    for run in runs:
+        ok = [p for p in run.photos if p.status == "ok"]
+        within = sum(measure.is_within(measure.ImageErrors(p.vertical, p.wall)) for p in ok)
+        wrong = ", ".join(f"{p.image} {p.vertical:.1f}/{p.wall:.1f}"
+                          for p in run.confidently_wrong)
+        lines.append(f"  {run.name:34s} ok {len(ok)} of {len(run.photos)}, within 2 deg "
+                     f"{within}, confidently wrong {len(run.confidently_wrong)}"
+                     f"{': ' + wrong if wrong else ''}")
+    return "\n".join(lines)
 
 
 @dataclass
@@ -351,6 +426,46 @@ def evaluate_other_photos_given_focal(folder: Path = OTHER_PHOTOS, jobs: int = 1
     return runs
 
 
+def survey_photos(folder: Path, factors: tuple[float, ...] = FOCAL_FACTORS,
+                  long_side: int = 640) -> list[tuple[str, list[str]]]:
+    """Any folder of photos whose orientation nobody measured (``*.jpg``, ``*.jpeg``,
+    ``*.png`` in it and below): each shrunk as ``tests/data/real`` is (area averaging) to a
+    long side of at most ``long_side`` pixels, then estimated in this process with no focal
+    length and with ``factors`` times its long side: per photo, the runs that gave a pose
+    (``none``, ``0.8`` ...) with its confidence and pan, tilt, roll. For photos that must be
+    refused (no man-made structure), every such run is a confidently wrong result to look
+    at."""
+    from gsrwt_cli.api.estimate import DEFAULT_MIN_CONFIDENCE, detect_segments, estimate_pose
+    from gsrwt_cli.geometry.camera import Intrinsics
+
+    cv2.setNumThreads(1)
+    found = []
+    for path in sorted(p for p in folder.rglob("*") if p.suffix.lower() in
+                       (".jpg", ".jpeg", ".png")):
+        pixels = cv2.imread(str(path), cv2.IMREAD_COLOR)
+        if pixels is None:
+            continue
+        height, width = pixels.shape[:2]
+        if max(height, width) > long_side:
+            scale = long_side / max(height, width)
+            width, height = round(width * scale), round(height * scale)
+            pixels = cv2.resize(pixels, (width, height), interpolation=cv2.INTER_AREA)
+        lines = detect_segments(pixels)
+        accepted = []
+        for factor in (None, *factors):
+            focal = None if factor is None else factor * max(width, height)
+            camera = None if focal is None else Intrinsics(
+                focal, focal, (width - 1) / 2, (height - 1) / 2, width=width, height=height)
+            estimate = estimate_pose(pixels, camera, lines=lines)
+            if estimate.error is None and estimate.confidence >= DEFAULT_MIN_CONFIDENCE:
+                pose = estimate.pose
+                accepted.append(f"{'none' if factor is None else f'{factor:g}'}: "
+                                f"{estimate.confidence:.2f} ({pose.pan:.1f} {pose.tilt:.1f} "
+                                f"{pose.roll:.1f})")
+        found.append((str(path.relative_to(folder)), accepted))
+    return found
+
+
 def report_given_focal(runs: list[GivenFocalRun], photos: list[OtherPhoto]) -> str:
     """The lines of :func:`evaluate_other_photos_given_focal`, as text."""
     must_refuse = sum(p.expected == "refuse" for p in photos)
@@ -389,6 +504,65 @@ def report_other_photos(photos: list[OtherPhoto]) -> str:
             f"  {p.image:18s} {p.expected:8s} | {p.estimate_status:6s} "
             f"{_format(p.estimate_confidence):>4s} {pose} {focal:>5s} | {p.auto_status:6s} "
             f"{_format(p.auto_confidence):>4s} {auto}")
+    return "\n".join(lines)
+
+
+@dataclass
+class BoardPhoto:
+    """One chessboard photo and what ``gsrwt estimate`` (its calibration given) made of it:
+    status, confidence and the errors against the board (:func:`measure.board_errors`)."""
+
+    image: str
+    status: str
+    confidence: float | None
+    vertical: float
+    wall: float
+    error: str
+
+    @property
+    def confidently_wrong(self) -> bool:
+        return measure.is_confidently_wrong(self.status == "ok",
+                                            measure.ImageErrors(self.vertical, self.wall))
+
+
+def evaluate_chessboards(folder: Path = BOARDS, jobs: int = 1) -> list[BoardPhoto]:
+    """``gsrwt estimate`` over OpenCV's chessboard photos (``right*.jpg``) with their
+    calibration file (``right_camera.yml``), each board's plane taken as the wall and measured
+    against its pose (``right_poses.csv``)."""
+    with open(folder / "right_poses.csv", newline="") as file:
+        poses = {row["image"]: [float(row[f"rvec_{c}"]) for c in "xyz"]
+                 for row in csv.DictReader(file)}
+    with tempfile.TemporaryDirectory(prefix="gsrwt-boards-") as temporary:
+        rows, _, _ = run_estimate([folder / image for image in poses], None, jobs,
+                                  Path(temporary) / "estimate.csv",
+                                  camera=folder / "right_camera.yml")
+    photos = []
+    for row in rows:
+        image = Path(row["image"]).name
+        directions = (measure.directions_from_pose(*_pose(row, "pan", "tilt", "roll"))
+                      if row["status"] == "ok" else None)
+        errors = measure.board_errors(directions, poses[image])
+        photos.append(BoardPhoto(image, row["status"], _number(row.get("confidence", "")),
+                                 errors.vertical, errors.wall, row.get("error", "")))
+    return photos
+
+
+def report_chessboards(photos: list[BoardPhoto]) -> str:
+    """The lines of :func:`evaluate_chessboards`, as text."""
+    ok = [p for p in photos if p.status == "ok"]
+    vertical = measure.summarize(p.vertical for p in ok)
+    wall = measure.summarize(p.wall for p in ok)
+    lines = [f"chessboard photos (tests/data/right*.jpg, calibration given; the board's plane as "
+             f"the wall, its pose by cv2.solvePnP): {len(ok)} of {len(photos)} ok, "
+             f"{sum(measure.is_within(measure.ImageErrors(p.vertical, p.wall)) for p in ok)} "
+             f"of them within 2 deg, confidently wrong: "
+             f"{', '.join(p.image for p in photos if p.confidently_wrong) or 'none'}",
+             f"  over the ok: vertical {_format(vertical.median)} / {_format(vertical.p90)} / "
+             f"{_format(vertical.worst)}, wall {_format(wall.median)} / {_format(wall.p90)} / "
+             f"{_format(wall.worst)}"]
+    for p in photos:
+        lines.append(f"  {p.image:12s} {p.status:6s} {_format(p.confidence):>4s} vertical "
+                     f"{_format(p.vertical):>6s} wall {_format(p.wall):>6s}")
     return "\n".join(lines)
 
 
@@ -492,7 +666,24 @@ def main() -> None:
                         help="the york-urban-train folder (truth.csv, images/)")
     parser.add_argument("--json", action="store_true", help="print JSON instead of the table")
     parser.add_argument("--jobs", type=int, default=1, help="gsrwt estimate's -j (default 1)")
+    parser.add_argument("--survey", type=Path, metavar="FOLDER",
+                        help="only estimate every photo in FOLDER (no focal length, then "
+                             "0.8 to 4 long sides) and list those that get a pose")
+    parser.add_argument("--long-side", type=int, default=640,
+                        help="--survey: shrink each photo to this long side first (640)")
+    parser.add_argument("--two-directions", action="store_true",
+                        help="also the York photos with one horizontal direction's edges left "
+                             "out (about a minute more)")
     arguments = parser.parse_args()
+    if arguments.survey is not None:
+        surveyed = survey_photos(arguments.survey, long_side=arguments.long_side)
+        for name, accepted in surveyed:
+            if accepted:
+                print(f"{name}: {'; '.join(accepted)}")
+        print(f"{sum(bool(a) for _, a in surveyed)} of {len(surveyed)} photos got a pose in "
+              f"some run (no focal length, or {', '.join(f'{f:g}' for f in FOCAL_FACTORS)} "
+              "times the long side)")
+        return
     data = arguments.data
     if not (data / "truth.csv").is_file() or not (data / "images").is_dir():
         parser.exit(2, f"bench_real_photos: no York Urban data at {data} (needs truth.csv and "
@@ -501,16 +692,27 @@ def main() -> None:
     in_process_ms = estimate_cpu_ms(data)
     others = evaluate_other_photos(OTHER_PHOTOS, arguments.jobs)
     given_focal = evaluate_other_photos_given_focal(OTHER_PHOTOS, arguments.jobs)
+    boards = evaluate_chessboards(BOARDS, arguments.jobs)
     if arguments.json:
         result = as_json(runs, data, arguments.jobs, in_process_ms)
         result["other_photos"] = [asdict(p) for p in others]
         result["other_photos_given_focal"] = [asdict(run) for run in given_focal]
+        result["chessboards"] = [asdict(p) for p in boards]
+        if arguments.two_directions:
+            result["two_directions"] = [
+                {"name": run.name, "photos": [asdict(p) for p in run.photos]}
+                for run in evaluate_two_directions(data)]
         print(json.dumps(_no_nan(result), indent=1, allow_nan=False))
     else:
         print(report(runs, data, arguments.jobs, in_process_ms))
         print()
         print(report_other_photos(others))
         print(report_given_focal(given_focal, others))
+        print()
+        print(report_chessboards(boards))
+    if arguments.two_directions and not arguments.json:
+        print()
+        print(report_two_directions(evaluate_two_directions(data)))
 
 
 if __name__ == "__main__":

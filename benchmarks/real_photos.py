@@ -133,6 +133,50 @@ def image_errors(estimate: SceneDirections | None, truth: SceneDirections) -> Im
     return ImageErrors(angle_between(estimate.up, truth.up), wall)
 
 
+def rotation_from_rvec(rvec: ArrayLike) -> NDArray[np.float64]:
+    """The rotation of a Rodrigues vector (OpenCV's ``rvec``: axis times angle in radians), by
+    Rodrigues' formula ``I + sin(t) K + (1 - cos(t)) K^2``."""
+    r = np.asarray(rvec, dtype=np.float64).reshape(3)
+    angle = float(np.linalg.norm(r))
+    if angle == 0.0:
+        return np.eye(3)
+    k = r / angle
+    cross = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
+    return np.eye(3) + math.sin(angle) * cross + (1.0 - math.cos(angle)) * cross @ cross
+
+
+def board_errors(estimate: SceneDirections | None, rvec: ArrayLike) -> ImageErrors:
+    """The two errors of a photo of a flat target whose pose (``rvec``: the target's frame in
+    OpenCV's camera frame, as ``cv2.solvePnP`` gives it) is known, its plane taken as the wall:
+    vertical, the angle between the estimated up and the nearer of the target's two in-plane
+    axes (as lines: a board has no up of its own); wall, between the estimated wall normal and
+    the target's normal (as lines). :data:`NO_ESTIMATE_DEG` on both without an estimate."""
+    if estimate is None:
+        return ImageErrors(NO_ESTIMATE_DEG, NO_ESTIMATE_DEG)
+    axes = rotation_from_rvec(rvec).T  # rows: the target's x, y and normal
+    vertical = min(angle_between_lines(estimate.up, axes[0]),
+                   angle_between_lines(estimate.up, axes[1]))
+    return ImageErrors(vertical, angle_between_lines(estimate.wall, axes[2]))
+
+
+def along_direction(lines: ArrayLike, camera_matrix: ArrayLike, direction: ArrayLike,
+                    tolerance_px: float) -> NDArray[np.bool_]:
+    """Which segments ``(N, 4)`` (``x1, y1, x2, y2`` pixels) run along the scene direction
+    ``direction`` (OpenCV camera frame) as the pinhole ``camera_matrix`` sees it: both end
+    points within about ``tolerance_px`` of the line through the segment's midpoint and the
+    direction's vanishing point (half the length times the sine of the angle between the
+    segment's interpretation plane and the direction)."""
+    segments = np.asarray(lines, dtype=np.float64).reshape(-1, 4)
+    inverse = np.linalg.inv(np.asarray(camera_matrix, dtype=np.float64))
+    ones = np.ones((len(segments), 1))
+    first = np.hstack([segments[:, :2], ones]) @ inverse.T
+    second = np.hstack([segments[:, 2:], ones]) @ inverse.T
+    normals = np.cross(first, second)
+    normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+    half = 0.5 * np.hypot(segments[:, 2] - segments[:, 0], segments[:, 3] - segments[:, 1])
+    return np.abs(normals @ _unit(direction)) * half < tolerance_px
+
+
 def summarize(errors: Iterable[float]) -> Summary:
     """Median, 90th percentile (numpy's linear interpolation) and worst."""
     values = np.asarray(list(errors), dtype=np.float64)

@@ -22,12 +22,14 @@ Steps (no I/O, nothing printed; arrays in, degrees out):
 6. refusals a user can act on (:func:`_refusal`), judged on the frame of step 3 as the
    confidence is (both were calibrated on it): no clear man-made structure (the frame
    explains the segments hardly better than random frames, :func:`structure_ratio`), no
-   vertical structure (no edge runs along its vertical, :func:`vertical_ratio`), a focal
+   vertical structure (fewer segments meet in its vertical than a direction needs to be
+   found, or they gather hardly more than along a random direction, :func:`vertical_ratio`), a focal
    length the view does not pin down (:func:`focal_uncertainty`); and the confidence, the
    calibrated chance of being within 2 degrees (:func:`confidence_of`), from how nearly a
    different frame fits as well, how far the focal length's uncertainty turns the pose and how
    far the frame's own segments, each direction's alone, point from its vertical and wall
-   normal (:func:`frame_misfit`).
+   normal (:func:`frame_misfit`), times the chance that the direction taken as the vertical
+   is up at all (:func:`upright_probability`: a prior that photos are taken about upright).
 
 Unknown focal length: the clusters' vanishing points do not depend on it; two finite
 orthogonal ones ``p1, p2`` give ``f^2 = -(p1 - c).(p2 - c)``, and the frame
@@ -110,6 +112,14 @@ SKEW_GRID_DEGREES = np.concatenate([[0.0], np.geomspace(0.05, MAX_SKEW_DEGREES, 
 #: Weights of :func:`confidence_of` (intercept, rival, focal degrees, misfit degrees), fitted
 #: by ``benchmarks/calibrate_confidence.py`` on the York Urban training photos.
 CONFIDENCE_WEIGHTS = (8.855, -7.212, -0.484, -0.807)
+#: How far a camera's up is taken to be from the world's up: the standard deviation, in
+#: degrees, of the angle between them (tilt and roll together) in the prior of
+#: :func:`upright_probability`. Lines cannot tell which of a frame's three directions is up;
+#: the one nearest the camera's up is taken, and it is the world's up as surely as the camera
+#: is about upright. Robots and photographers hold cameras about upright (the York Urban
+#: photos within 20 degrees, a facade shot from below 38): a broad prior, set from the photos
+#: the tool is for, not fitted to any.
+UPRIGHT_SPREAD_DEGREES = 25.0
 #: ``gsrwt estimate`` and ``rectify --auto`` refuse estimates less confident than this: more
 #: likely more than 2 degrees off than not.
 DEFAULT_MIN_CONFIDENCE = 0.5
@@ -175,7 +185,8 @@ class PoseEstimate:
     (:class:`FocalUncertainty`, None when given); ``rival``: :attr:`ManhattanFrame.rival`;
     ``misfit``: degrees between the frame's vertical or frontal wall's normal (whichever
     ``wall`` is reported) and the direction its own segments alone meet in
-    (:func:`frame_misfit`).
+    (:func:`frame_misfit`); ``upright``: the probability that the frame's direction taken as
+    the vertical is the world's up (:func:`upright_probability`).
     """
 
     pose: Pose | None
@@ -194,6 +205,7 @@ class PoseEstimate:
     focal_uncertainty: FocalUncertainty | None = None
     rival: float = 0.0
     misfit: float = 0.0
+    upright: float = 1.0
 
     @property
     def ok(self) -> bool:
@@ -928,17 +940,37 @@ def frame_misfit(normals: np.ndarray, half: np.ndarray, directions: np.ndarray,
     return misfit
 
 
-def confidence_of(rival: float, focal_degrees: float = 0.0, misfit: float = 0.0) -> float:
+def confidence_of(rival: float, focal_degrees: float = 0.0, misfit: float = 0.0,
+                  upright: float = 1.0) -> float:
     """The probability that the pose is within 2 degrees of the truth (vertical and wall
-    normal): ``1 / (1 + exp(-(w0 + w1 * rival + w2 * focal_degrees + w3 * misfit)))`` with the
+    normal): that the frame's vertical is the world's up (``upright``,
+    :func:`upright_probability`) times that the pose is within 2 degrees if it is,
+    ``1 / (1 + exp(-(w0 + w1 * rival + w2 * focal_degrees + w3 * misfit)))`` with the
     weights :data:`CONFIDENCE_WEIGHTS` fitted on real photos
-    (``benchmarks/calibrate_confidence.py``). ``rival``: :attr:`ManhattanFrame.rival`;
-    ``focal_degrees``: how far an estimated focal length's standard deviation turns the pose
-    (:class:`FocalUncertainty`; 0 when given); ``misfit``: how far the vertical's and the wall
-    normal's own segments point from them (:func:`frame_misfit`, degrees)."""
+    (``benchmarks/calibrate_confidence.py``; their verticals all plainly up, ``upright`` at
+    least 0.97). ``rival``: :attr:`ManhattanFrame.rival`; ``focal_degrees``: how far an
+    estimated focal length's standard deviation turns the pose (:class:`FocalUncertainty`; 0
+    when given); ``misfit``: how far the vertical's and the wall normal's own segments point
+    from them (:func:`frame_misfit`, degrees)."""
     w0, w1, w2, w3 = CONFIDENCE_WEIGHTS
-    return float(1.0 / (1.0 + math.exp(-(w0 + w1 * rival + w2 * focal_degrees
-                                         + w3 * misfit))))
+    return upright * float(1.0 / (1.0 + math.exp(-(w0 + w1 * rival + w2 * focal_degrees
+                                                    + w3 * misfit))))
+
+
+def upright_probability(directions: np.ndarray) -> float:
+    """The probability that the direction of the frame ``directions`` (columns, thesis camera
+    frame) nearest the camera's up (X) is the world's up, the one :func:`world_from_camera_of`
+    takes as the vertical: under a Gaussian prior of :data:`UPRIGHT_SPREAD_DEGREES` on the
+    angle ``a`` between the camera's up and the world's, each direction weighs
+    ``exp(-a^2 / 2 s^2)`` (``a`` its angle from the camera's up, as a line) and the nearest
+    one's share is returned. About 1 for a photo taken about upright (the next direction is
+    70 degrees or more from the camera's up), 0.5 where two directions are equally upright
+    (a frame rolled 45 degrees): the lines cannot tell which is up, and the photo's being
+    upright can only tell as far as one of them is plainly the more upright."""
+    angles = np.degrees(np.arccos(np.minimum(np.abs(directions[0]), 1.0)))
+    # each over the nearest one's weight: the nearest weighs 1 however small the spread
+    weights = np.exp(-0.5 * (angles**2 - angles.min() ** 2) / UPRIGHT_SPREAD_DEGREES**2)
+    return float(1.0 / weights.sum())
 
 
 def confidence_features(estimate: PoseEstimate) -> np.ndarray:
@@ -1031,9 +1063,13 @@ def estimate_pose(
             ideal, _camera_from_pixel(Intrinsics(side, side, centre[0], centre[1])))
         frame = fit_manhattan_frame(normals, half, inlier_px, upright=False)
         structure = structure_ratio(normals, half, frame.directions, inlier_px)
-        if structure < MIN_STRUCTURE_RATIO:
-            return _failure(str(_refusal(structure, None)), detected, segments,
-                            estimated=True, structure=structure)
+        # a frame at a focal length that may be far off has the view's directions only
+        # about: a vertical no edge runs along is told, not how many edges meet in it
+        up = world_from_camera_of(frame.directions)[1][0]
+        refusal = _refusal(structure, None, vertical_ratio(
+            normals, half, frame.directions[:, up], inlier_px))
+        if refusal is not None:
+            return _failure(refusal, detected, segments, estimated=True, structure=structure)
         return _failure(
             "cannot tell the focal length: no two finite vanishing points of orthogonal "
             f"directions ({segments} segments); give the focal length", detected, segments,
@@ -1104,13 +1140,21 @@ def _focal_of(ideal: np.ndarray, centre: np.ndarray, diagonal: float, side: floa
 
 
 def _refusal(structure: float, uncertainty: FocalUncertainty | None,
-             vertical: float = math.inf) -> str | None:
+             vertical: float = math.inf, vertical_segments: tuple[int, int] | None = None
+             ) -> str | None:
     """Why a frame cannot be trusted, in words a user understands, or None; ``vertical``:
-    :func:`vertical_ratio`."""
+    :func:`vertical_ratio`; ``vertical_segments``: the segments that meet in the frame's
+    vertical and how many a direction needs to be found (:data:`MIN_DIRECTION_SEGMENTS`)."""
     if structure < MIN_STRUCTURE_RATIO:
         return (f"no clear man-made structure: the straight segments fit three orthogonal "
                 f"directions only {structure:.1f} times as well as random ones do "
                 f"(need {MIN_STRUCTURE_RATIO:g})")
+    if vertical_segments is not None and vertical_segments[0] < vertical_segments[1]:
+        count = vertical_segments[0]
+        runs = ("no segment runs" if count == 0 else
+                "only 1 segment runs" if count == 1 else f"only {count} segments run")
+        return (f"no vertical structure: {runs} along the vertical found (need "
+                f"{vertical_segments[1]}); give the pose, or guides (--verticals)")
     if vertical < MIN_VERTICAL_RATIO:
         return (f"no vertical structure: the segments along the vertical found fit it only "
                 f"{vertical:.1f} times as well as a random direction (need "
@@ -1145,7 +1189,7 @@ def _estimate_known_focal(detected: np.ndarray, ideal: np.ndarray, camera: Intri
     # and the confidence are the rotation's, not its naming's
     frontal = world_from_camera_of(frame.directions)[1]
     vertical = vertical_ratio(normals, half, frame.directions[:, frontal[0]], inlier_px)
-    refusal = _refusal(structure, uncertainty, vertical)
+    refusal = _refusal(structure, uncertainty, vertical, (int(support[frontal[0]]), needed))
     if refusal is not None:
         return _failure(refusal, detected, segments, found, camera.focal, estimated,
                         frame.labels, structure, uncertainty)
@@ -1172,11 +1216,12 @@ def _estimate_known_focal(detected: np.ndarray, ideal: np.ndarray, camera: Intri
             points.append(None)
         else:
             points.append((float(point[0] / point[2]), float(point[1] / point[2])))
+    upright = upright_probability(frame.directions)
     return PoseEstimate(
         pose, camera.focal, estimated,
         confidence_of(frame.rival, 0.0 if uncertainty is None else uncertainty.degrees,
-                      misfit), segments,
+                      misfit, upright), segments,
         int((frame.labels >= 0).sum()), found, tuple(points), world_from_camera, detected,
         relabel, structure=structure, focal_uncertainty=uncertainty, rival=frame.rival,
-        misfit=misfit,
+        misfit=misfit, upright=upright,
     )

@@ -56,6 +56,9 @@ from .workers import ProcessWorker
 
 #: How ``--auto`` finds a pose: from the image's lines, or from a document's corners.
 AUTO_MODES = ("lines", "document")
+#: A refusal for low confidence names the vertical's uncertainty when it is surely up with
+#: less than this probability (:func:`~gsrwt_cli.api.estimate.upright_probability`).
+UPRIGHT_NOTED = 0.95
 #: With the focal length known, four corners over-determine a rectangle's pose by one
 #: number: the root mean square (pixels) by which the best rectangle's corners may miss the
 #: found ones. What 0.5 px of error on each corner coordinate explains at 99 % (chi-square, one
@@ -193,6 +196,9 @@ def checked(estimate: PoseEstimate, options: EstimateOptions) -> None:
                     f"{estimate.focal_uncertainty.degrees:.1f} deg")
         why += (f"; the vertical's and the wall's own lines point up to "
                 f"{estimate.misfit:.1f} deg from the fitted frame")
+        if estimate.upright < UPRIGHT_NOTED:
+            why += (f"; another of its directions is nearly as upright: the vertical taken "
+                    f"is up with probability {estimate.upright:.2f}")
         raise EstimateError(f"confidence {estimate.confidence:.2f} is below the minimum "
                             f"{options.min_confidence:g} ({why})")
 

@@ -223,6 +223,58 @@ def test_other_photos_are_listed_documented_and_small():
 
 
 # ------------------------------------------------------------------------------------------
+# OpenCV's chessboard photos with their poses (tests/data/right*.jpg)
+# ------------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_rodrigues_vectors_turn_as_opencv_turns_them(seed):
+    rvec = np.random.default_rng(seed).normal(size=3)
+    assert np.allclose(measure.rotation_from_rvec(rvec), cv2.Rodrigues(rvec)[0], atol=1e-12)
+    assert np.array_equal(measure.rotation_from_rvec([0, 0, 0]), np.eye(3))
+
+
+def test_a_board_has_no_up_of_its_own():
+    """A board facing the camera squarely, turned 30 degrees in its plane: an estimate whose
+    up is the board's y axis (turned so) is right, as is one whose up is its x axis; the wall
+    normal is measured against the board's normal, as lines."""
+    rvec = [0.0, 0.0, math.radians(30.0)]  # the board's x axis 30 degrees from the camera's x
+    board_x = np.array([math.cos(math.radians(30)), math.sin(math.radians(30)), 0.0])
+    board_y = np.array([-math.sin(math.radians(30)), math.cos(math.radians(30)), 0.0])
+    for up in (board_x, -board_y):
+        estimate = measure.SceneDirections(up, np.array([0.0, 0.0, -1.0]), np.cross(up, [0, 0, 1]))
+        errors = measure.board_errors(estimate, rvec)
+        assert errors.vertical < 1e-6 and errors.wall < 1e-6
+    tilted = measure.SceneDirections(np.array([0.0, -1.0, 0.0]), np.array([0.0, 0.0, 1.0]),
+                                     np.array([1.0, 0.0, 0.0]))
+    errors = measure.board_errors(tilted, rvec)
+    assert errors.vertical == pytest.approx(30.0) and errors.wall < 1e-6
+    assert measure.board_errors(None, rvec) == (measure.NO_ESTIMATE_DEG, measure.NO_ESTIMATE_DEG)
+
+
+def test_chessboard_photos_are_right_or_refused():
+    """``gsrwt estimate`` over OpenCV's 13 chessboard photos with their calibration file,
+    each board's plane taken as the wall and measured against its pose (``cv2.solvePnP`` of its
+    corners). 2026-12-03: 7 get a pose, all 7 within 2 degrees (vertical 0.10 to 0.49, wall
+    0.32 to 1.12); none confidently wrong. ``right13`` was (7.1 and 13.6 degrees, confidence
+    0.53): a frame of the board and one 13 degrees from it, which takes in the room behind,
+    fit its lines equally well, and the tie went to the more upright; but the board is held
+    22 degrees from level, and the frame's vertical is 30 degrees from the camera's up with
+    another direction at 63: up with probability 0.91 only (``upright_probability``), which
+    takes its confidence to 0.48, and it is refused (docs/REAL_PHOTOS.md). Floors at today's
+    figures: they fail if the estimator gets worse (without the upright prior, by right13)."""
+    boards = bench_real_photos.evaluate_chessboards()
+    assert len(boards) == 13
+    ok = [p for p in boards if p.status == "ok"]
+    within = [p for p in ok if measure.is_within(measure.ImageErrors(p.vertical, p.wall))]
+    assert len(ok) >= 7 and len(within) >= 7
+    assert [p.image for p in boards if p.confidently_wrong] == []
+    assert np.median([p.vertical for p in within]) < 0.5
+    assert np.median([p.wall for p in within]) < 0.8
+    assert all(p.error for p in boards if p.status != "ok")
+
+
+# ------------------------------------------------------------------------------------------
 # The York Urban training half: EXIF removal, and today's figures as a floor
 # ------------------------------------------------------------------------------------------
 
