@@ -367,8 +367,9 @@ def test_york_as_taken_with_the_exif_focal_length(york_runs):
 def test_york_confidence_is_the_chance_of_being_within_2_degrees(york_runs):
     """The confidence is calibrated (benchmarks/calibrate_confidence.py): over the photos with
     a pose, its mean is the fraction within 2 degrees on both measures, and its Brier score
-    (mean squared difference from 1 within, 0 not) is low. 2026-12-03: mean 0.88 against 0.92
-    within and Brier 0.078 with the focal length; 0.84 against 0.85 and 0.130 without (before
+    (mean squared difference from 1 within, 0 not) is low. 2026-12-03: mean 0.875 against 0.920
+    within and Brier 0.078 with the focal length; 0.837 against 0.854 and 0.129 without (the
+    upright prior takes 0.005 off each mean: the photos' verticals are all plainly up; before
     each direction was fitted alone and reconciled: 0.88 against 0.90, 0.086; 0.84 against
     0.83, 0.142; before the frame's misfit: 0.86 against 0.88, 0.097; 0.81 against 0.79,
     0.158; the first confidence: 0.92 against 0.86, 0.121; 0.92 against 0.74, 0.218)."""
