@@ -927,7 +927,9 @@ def frame_misfit(normals: np.ndarray, half: np.ndarray, directions: np.ndarray,
     down by its segments); the other horizontal, its vanishing point usually far outside the
     image, is fitted loosely by its own segments (on the York Urban training photos up to 8
     degrees off where the pose is within 2 degrees), and weighing it too made the confidence
-    worse (docs/REAL_PHOTOS.md)."""
+    worse (docs/REAL_PHOTOS.md). Where no edge recedes from the camera (the normal has fewer
+    than :data:`MIN_DIRECTION_SEGMENTS` segments: a wall seen about frontally) the wall's
+    horizontal alone pins the pan, and it is weighed instead."""
     misfit = 0.0
     for k in axes:
         own = labels == k
@@ -1204,8 +1206,11 @@ def _estimate_known_focal(detected: np.ndarray, ideal: np.ndarray, camera: Intri
     except (PoseError, ValueError) as error:
         return _failure(f"no pose: {error}", detected, segments, found, camera.focal, estimated,
                         frame.labels)
+    # the directions that pin the pose: the vertical and the frontal wall's normal, or where
+    # no edge recedes from the camera (a wall seen frontally) the wall's horizontal instead
+    pinning = frontal[2] if support[frontal[2]] >= MIN_DIRECTION_SEGMENTS else frontal[1]
     misfit = frame_misfit(normals, half, frame.directions, frame.labels,
-                          (frontal[0], frontal[2]))
+                          (frontal[0], pinning))
     pixel_from_camera = np.linalg.inv(_camera_from_pixel(camera))
     points: list[tuple[float, float] | None] = []
     relabel = -np.ones(len(frame.labels), dtype=int)
