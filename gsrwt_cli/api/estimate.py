@@ -23,8 +23,9 @@ Steps (no I/O, nothing printed; arrays in, degrees out):
    confidence is (both were calibrated on it): no clear man-made structure (the frame
    explains the segments hardly better than random frames, :func:`structure_ratio`), no
    vertical structure (fewer segments meet in its vertical than a direction needs to be
-   found, or they gather hardly more than along a random direction, :func:`vertical_ratio`), a focal
-   length the view does not pin down (:func:`focal_uncertainty`); and the confidence, the
+   found, or they gather hardly more than along a random direction,
+   :func:`vertical_ratio`), a focal length the view does not pin down
+   (:func:`focal_uncertainty`); and the confidence, the
    calibrated chance of being within 2 degrees (:func:`confidence_of`), from how nearly a
    different frame fits as well, how far the focal length's uncertainty turns the pose and how
    far the frame's own segments, each direction's alone, point from its vertical and wall
@@ -184,8 +185,8 @@ class PoseEstimate:
     (:func:`structure_ratio`); ``focal_uncertainty``: an estimated focal length's
     (:class:`FocalUncertainty`, None when given); ``rival``: :attr:`ManhattanFrame.rival`;
     ``misfit``: degrees between the frame's vertical or frontal wall's normal (whichever
-    ``wall`` is reported) and the direction its own segments alone meet in
-    (:func:`frame_misfit`); ``upright``: the probability that the frame's direction taken as
+    ``wall`` is reported; the wall's horizontal where no edge recedes) and the direction its
+    own segments alone meet in (:func:`frame_misfit`); ``upright``: the probability that the frame's direction taken as
     the vertical is the world's up (:func:`upright_probability`).
     """
 
@@ -1065,8 +1066,8 @@ def estimate_pose(
             ideal, _camera_from_pixel(Intrinsics(side, side, centre[0], centre[1])))
         frame = fit_manhattan_frame(normals, half, inlier_px, upright=False)
         structure = structure_ratio(normals, half, frame.directions, inlier_px)
-        # a frame at a focal length that may be far off has the view's directions only
-        # about: a vertical no edge runs along is told, not how many edges meet in it
+        # the frame found at a stand-in focal length is the view's only roughly: it can
+        # tell a vertical no edge runs along, not how many edges meet in it
         up = world_from_camera_of(frame.directions)[1][0]
         refusal = _refusal(structure, None, vertical_ratio(
             normals, half, frame.directions[:, up], inlier_px))

@@ -252,6 +252,29 @@ def test_a_board_has_no_up_of_its_own():
     assert measure.board_errors(None, rvec) == (measure.NO_ESTIMATE_DEG, measure.NO_ESTIMATE_DEG)
 
 
+def test_segments_along_a_direction_are_told_by_where_they_vanish():
+    """Segments projected by ``cv2.projectPoints`` along a scene direction meet in its
+    vanishing point: :func:`measure.along_direction` picks them out, and not those along a
+    direction 2 degrees from it (their ends miss by more than 1 px over 100 px and more)."""
+    rng = np.random.default_rng(4)
+    matrix = np.array([[600.0, 0, 320], [0, 600.0, 240], [0, 0, 1]])
+    direction = np.array([0.3, -0.9, 0.2]) / np.linalg.norm([0.3, -0.9, 0.2])
+    other = cv2.Rodrigues(np.radians([0.0, 0.0, 2.0]))[0] @ direction  # turned in the image
+    starts = rng.uniform([-2, -2, 6], [2, 2, 10], size=(30, 3))
+
+    def segments(along: np.ndarray) -> np.ndarray:
+        points = np.vstack([starts, starts + 1.5 * along])
+        pixels = cv2.projectPoints(points, np.zeros(3), np.zeros(3), matrix, None)[0]
+        return np.hstack([pixels[:30, 0], pixels[30:, 0]])
+
+    assert measure.along_direction(segments(direction), matrix, direction, 0.5).all()
+    assert measure.along_direction(segments(direction), matrix, -direction, 0.5).all()
+    drifted = segments(other)
+    long_ones = np.hypot(*(drifted[:, 2:] - drifted[:, :2]).T) > 100
+    assert long_ones.sum() >= 10
+    assert not measure.along_direction(drifted[long_ones], matrix, direction, 1.0).any()
+
+
 def test_chessboard_photos_are_right_or_refused():
     """``gsrwt estimate`` over OpenCV's 13 chessboard photos with their calibration file,
     each board's plane taken as the wall and measured against its pose (``cv2.solvePnP`` of its
