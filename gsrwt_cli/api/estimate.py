@@ -186,8 +186,8 @@ class PoseEstimate:
     (:class:`FocalUncertainty`, None when given); ``rival``: :attr:`ManhattanFrame.rival`;
     ``misfit``: degrees between the frame's vertical or frontal wall's normal (whichever
     ``wall`` is reported; the wall's horizontal where no edge recedes) and the direction its
-    own segments alone meet in (:func:`frame_misfit`); ``upright``: the probability that the frame's direction taken as
-    the vertical is the world's up (:func:`upright_probability`).
+    own segments alone meet in (:func:`frame_misfit`); ``upright``: the probability that the
+    frame's direction taken as the vertical is the world's up (:func:`upright_probability`).
     """
 
     pose: Pose | None

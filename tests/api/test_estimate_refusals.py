@@ -152,15 +152,15 @@ def test_the_vertical_is_up_as_surely_as_one_direction_is_plainly_the_most_uprig
     from gsrwt_cli.geometry.rotations import rotation_from_pose
 
     def probability(pan: float, tilt: float, roll: float) -> float:
-        # the frame's directions in the camera frame: the rows of world_from_camera
-        return upright_probability(rotation_from_pose(pan, tilt, roll).T @ np.eye(3))
+        # the frame's directions (columns) in the camera frame: world_from_camera's rows
+        return upright_probability(rotation_from_pose(pan, tilt, roll).T)
 
     assert probability(0.0, 0.0, 0.0) > 0.99
     assert probability(30.0, 20.0, 5.0) > 0.97
     assert probability(0.0, 0.0, 45.0) == pytest.approx(0.5, abs=0.005)
     rolls = [probability(10.0, 0.0, roll) for roll in (0, 10, 20, 30, 40, 45)]
     assert all(a > b for a, b in zip(rolls, rolls[1:]))
-    for rotation in (rotation_from_pose(10.0, 25.0, 40.0), np.eye(3)):
+    for rotation in (rotation_from_pose(10.0, 25.0, 40.0), np.eye(3)):  # any orthonormal
         weights = np.exp(-0.5 * (np.degrees(np.arccos(np.abs(rotation[0]))) /
                                  UPRIGHT_SPREAD_DEGREES) ** 2)
         assert upright_probability(rotation) == pytest.approx(weights.max() / weights.sum())
