@@ -16,9 +16,11 @@ two-fold check: the weights fitted on the photos of odd index (in sorted order) 
 of even index and the other way round, each fold's accepted and confidently wrong (accepted
 and more than 3 degrees off) per run.
 
-    python benchmarks/calibrate_confidence.py [PATH-TO-york-urban-train]
+    python benchmarks/calibrate_confidence.py [PATH-TO-york-urban-train] [--frontal]
 
 Copy the weights it prints into ``CONFIDENCE_WEIGHTS`` in gsrwt_cli/api/estimate.py.
+``--frontal`` instead fits ``UNSEEN_NORMAL_LOGIT``, the logit's offset for walls seen
+frontally (:func:`frontal_views`), over all the views and over each half.
 """
 
 from __future__ import annotations
@@ -37,6 +39,8 @@ import real_photos as measure  # noqa: E402
 from gsrwt_cli.api.estimate import (  # noqa: E402
     DEFAULT_MIN_CONFIDENCE,
     confidence_features,
+    confidence_of,
+    detect_segments,
     estimate_pose,
 )
 from gsrwt_cli.geometry.camera import Intrinsics  # noqa: E402
@@ -90,6 +94,65 @@ def fit_logistic(features: np.ndarray, outcome: np.ndarray, prior: float = 1.0
     return np.concatenate([[weights[0] - mean @ slopes], slopes])
 
 
+def frontal_views(data: Path) -> list[tuple[int, float, float, bool]]:
+    """The York photos as walls seen about frontally: their detected segments less those
+    along the true wall normal (as ``bench_real_photos.py --two-directions`` makes them), the
+    focal length given. Per estimate whose frontal wall's normal is left with no segments of
+    its own and that is not refused: the photo's index in sorted order, the logit of
+    :func:`confidence_of` without the offset, the upright probability, and whether within 2
+    degrees on both measures."""
+    rows = []
+    for index, (image, truth) in enumerate(sorted(bench.read_truth(data).items())):
+        picture = cv2.imread(str(data / "images" / image), cv2.IMREAD_COLOR)
+        height, width = picture.shape[:2]
+        focal, cx, cy = (float(truth[key]) for key in ("focal_px", "cx", "cy"))
+        directions = bench.true_directions(truth)
+        lines = detect_segments(picture)
+        matrix = np.array([[focal, 0, cx], [0, focal, cy], [0, 0, 1.0]])
+        lines = lines[~measure.along_direction(lines, matrix, directions.wall,
+                                               bench.LEFT_OUT_PX)]
+        estimate = estimate_pose(picture, Intrinsics(focal, focal, cx, cy, width=width,
+                                                     height=height), lines=lines)
+        if not estimate.ok or estimate.normal_seen:
+            continue
+        pose = estimate.pose
+        errors = measure.image_errors(
+            measure.directions_from_pose(pose.pan, pose.tilt, pose.roll), directions)
+        chance = confidence_of(*confidence_features(estimate))  # no offset, no upright
+        rows.append((index, float(np.log(chance / (1.0 - chance))), estimate.upright,
+                     measure.is_within(errors)))
+    return rows
+
+
+def fit_offset(logits: np.ndarray, upright: np.ndarray, within: np.ndarray) -> float:
+    """The offset ``d`` of the logits that makes ``upright / (1 + exp(-(logit + d)))`` most
+    likely to give ``within`` (maximum likelihood over a grid of 0.01, -3 to 2)."""
+    grid = np.linspace(-3.0, 2.0, 501)
+    chance = upright[None, :] / (1.0 + np.exp(-(logits[None, :] + grid[:, None])))
+    chance = np.clip(chance, 1e-12, 1.0 - 1e-12)
+    likelihood = (within * np.log(chance) + (1.0 - within) * np.log(1.0 - chance)).sum(axis=1)
+    return float(grid[int(np.argmax(likelihood))])
+
+
+def main_frontal(data: Path) -> None:
+    """``--frontal``: the offset over all the frontal views and over each half, and the
+    calibration it gives."""
+    rows = np.array(frontal_views(data), dtype=float)
+    index, logits, upright, within = rows.T
+    print(f"{len(rows)} walls seen frontally, not refused ({int(within.sum())} within "
+          f"{measure.WITHIN_DEG:g} deg) on {data}")
+    offset = fit_offset(logits, upright, within)
+    print(f"UNSEEN_NORMAL_LOGIT = {offset:.2f}")
+    for name, half in (("even", index % 2 == 0), ("odd", index % 2 == 1)):
+        print(f"  fitted on the photos of {name} index only: "
+              f"{fit_offset(logits[half], upright[half], within[half]):.2f}")
+    for name, shift in (("without the offset", 0.0), ("with it", offset)):
+        chance = upright / (1.0 + np.exp(-(logits + shift)))
+        kept = chance >= DEFAULT_MIN_CONFIDENCE
+        print(f"  {name}: {int(kept.sum())} accepted, mean confidence "
+              f"{chance[kept].mean():.3f} against {within[kept].mean():.3f} within")
+
+
 def reliability(confidences: list[float], within: list[bool]) -> str:
     return "\n".join(
         f"    {b.low:.1f}-{b.high:.1f}: n {b.count:3d}, mean {b.mean_confidence:.2f}, "
@@ -100,9 +163,15 @@ def reliability(confidences: list[float], within: list[bool]) -> str:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("data", nargs="?", type=Path, default=bench.DEFAULT_DATA)
-    data = parser.parse_args().data
+    parser.add_argument("--frontal", action="store_true",
+                        help="fit the offset for walls seen frontally instead")
+    arguments = parser.parse_args()
+    data = arguments.data
     if not (data / "truth.csv").is_file():
         parser.exit(2, f"calibrate_confidence: no York Urban data at {data}\n")
+    if arguments.frontal:
+        main_frontal(data)
+        return
     rows = photo_measures(data)
     features = np.array([row[1] for row in rows])
     within = np.array([row[2] for row in rows], dtype=float)

@@ -196,6 +196,9 @@ def checked(estimate: PoseEstimate, options: EstimateOptions) -> None:
                     f"{estimate.focal_uncertainty.degrees:.1f} deg")
         why += (f"; the vertical's and the wall's own lines point up to "
                 f"{estimate.misfit:.1f} deg from the fitted frame")
+        if not estimate.normal_seen:
+            why += ("; no edge recedes from the camera: the wall's direction rests on its "
+                    "horizontals alone")
         if estimate.upright < UPRIGHT_NOTED:
             why += (f"; another of its directions is nearly as upright: the vertical taken "
                     f"is up with probability {estimate.upright:.2f}")

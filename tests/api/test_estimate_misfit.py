@@ -15,6 +15,7 @@ import pytest
 
 from gsrwt_cli.api.estimate import (
     DEFAULT_MIN_CONFIDENCE,
+    UNSEEN_NORMAL_LOGIT,
     confidence_features,
     confidence_of,
     estimate_pose,
@@ -102,3 +103,26 @@ def test_a_wall_seen_frontally_is_judged_by_its_horizontals(seed):
     wrong = estimate_pose(BLANK, camera, lines=np.vstack([verticals, turned]))
     assert abs(wrong.pose.pan - 25.0) > 5.0  # the pan the horizontals give is far off
     assert wrong.misfit > 5.0 and wrong.confidence < 0.1
+    assert not right.normal_seen and not wrong.normal_seen  # no edge recedes
+
+
+def test_a_wall_seen_frontally_is_less_sure_than_its_measures_say():
+    """The confidence of a wall whose normal has no edges of its own is its measures' logit
+    lowered by ``UNSEEN_NORMAL_LOGIT`` (such views made from the York Urban photos were within
+    2 degrees less often than the measures said); a room whose edges recede keeps its
+    measures' confidence."""
+    camera = Intrinsics(600.0, 600.0, width=640, height=480)
+    wall = synthetic_lines(20.0, 10.0, 2.0, 600.0, 3, axes=(0, 1), outliers=0.0)
+    room = synthetic_lines(20.0, 10.0, 2.0, 600.0, 3)
+    frontal = estimate_pose(BLANK, camera, lines=wall)
+    receding = estimate_pose(BLANK, camera, lines=room)
+    assert not frontal.normal_seen and receding.normal_seen
+    for estimate in (frontal, receding):
+        features = confidence_features(estimate)
+        measured = confidence_of(*features, estimate.upright)
+        logit = math.log(measured / (estimate.upright - measured))
+        expected = estimate.upright / (1.0 + math.exp(-(
+            logit + (0.0 if estimate.normal_seen else UNSEEN_NORMAL_LOGIT))))
+        assert estimate.confidence == pytest.approx(expected, rel=1e-9)
+    assert UNSEEN_NORMAL_LOGIT < 0 and frontal.confidence < confidence_of(
+        *confidence_features(frontal), frontal.upright)
