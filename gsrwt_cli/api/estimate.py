@@ -29,8 +29,10 @@ Steps (no I/O, nothing printed; arrays in, degrees out):
    calibrated chance of being within 2 degrees (:func:`confidence_of`), from how nearly a
    different frame fits as well, how far the focal length's uncertainty turns the pose and how
    far the frame's own segments, each direction's alone, point from its vertical and wall
-   normal (:func:`frame_misfit`), times the chance that the direction taken as the vertical
-   is up at all (:func:`upright_probability`: a prior that photos are taken about upright).
+   normal (:func:`frame_misfit`; where no edge recedes, its horizontal), lower for a wall seen
+   frontally (:data:`UNSEEN_NORMAL_LOGIT`), times the chance that the direction taken as the
+   vertical is up at all (:func:`upright_probability`: a prior that photos are taken about
+   upright).
 
 Unknown focal length: the clusters' vanishing points do not depend on it; two finite
 orthogonal ones ``p1, p2`` give ``f^2 = -(p1 - c).(p2 - c)``, and the frame
