@@ -52,6 +52,7 @@ import subprocess
 import sys
 import tempfile
 import time
+from collections.abc import Iterator
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
@@ -264,38 +265,47 @@ def estimate_cpu_ms(data: Path, passes: int = IN_PROCESS_PASSES) -> float:
 LEFT_OUT_PX = 3.0
 
 
-def evaluate_two_directions(data: Path) -> list[RunResult]:
-    """The York photos seen with one horizontal direction's edges gone, in this process: the
-    segments ``gsrwt estimate`` detects, less those along the true wall normal (a wall seen
-    about frontally: its verticals and horizontals only), or less those along the other true
-    horizontal (a corridor: its verticals and the edges receding from the camera); then the
-    estimate with the calibrated focal length and principal point. Views the photos do not
-    show as a whole, made of their real edges (:func:`measure.along_direction`)."""
-    from gsrwt_cli.api.estimate import DEFAULT_MIN_CONFIDENCE, detect_segments, estimate_pose
+def estimates_without(data: Path, dropped: str) -> Iterator[tuple[str, object,
+                                                                 measure.SceneDirections]]:
+    """Each York photo (in sorted order) seen with one true direction's edges gone, in this
+    process: the segments ``gsrwt estimate`` detects, less those along the true ``dropped``
+    (``wall``: the wall normal, leaving a wall seen about frontally; ``side``: the other
+    horizontal, leaving a corridor's verticals and receding edges, :func:`measure.
+    along_direction`), estimated with the calibrated focal length and principal point: the
+    photo's name, the estimate and the true directions."""
+    from gsrwt_cli.api.estimate import detect_segments, estimate_pose
     from gsrwt_cli.geometry.camera import Intrinsics
 
     cv2.setNumThreads(1)
+    for image, row in sorted(read_truth(data).items()):
+        pixels = cv2.imread(str(data / "images" / image))
+        height, width = pixels.shape[:2]
+        focal, cx, cy = (float(row[key]) for key in ("focal_px", "cx", "cy"))
+        lines = detect_segments(pixels)
+        truth = true_directions(row)
+        matrix = np.array([[focal, 0, cx], [0, focal, cy], [0, 0, 1.0]])
+        kept = lines[~measure.along_direction(lines, matrix, getattr(truth, dropped),
+                                              LEFT_OUT_PX)]
+        yield image, estimate_pose(pixels, Intrinsics(focal, focal, cx, cy, width=width,
+                                                      height=height), lines=kept), truth
+
+
+def evaluate_two_directions(data: Path) -> list[RunResult]:
+    """The York photos as walls seen about frontally and as corridors
+    (:func:`estimates_without`): views the photos do not show as a whole, made of their real
+    edges, each estimate measured as the whole photos' are."""
+    from gsrwt_cli.api.estimate import DEFAULT_MIN_CONFIDENCE
+
     runs = []
-    truth = read_truth(data)
     for name, dropped in (("frontal wall (no receding edges)", "wall"),
                           ("vertical and receding edges only", "side")):
         photos = []
-        for image, row in truth.items():
-            pixels = cv2.imread(str(data / "images" / image))
-            height, width = pixels.shape[:2]
-            focal, cx, cy = (float(row[key]) for key in ("focal_px", "cx", "cy"))
-            lines = detect_segments(pixels)
-            truth_directions = true_directions(row)
-            matrix = np.array([[focal, 0, cx], [0, focal, cy], [0, 0, 1.0]])
-            kept = lines[~measure.along_direction(
-                lines, matrix, getattr(truth_directions, dropped), LEFT_OUT_PX)]
-            estimate = estimate_pose(pixels, Intrinsics(focal, focal, cx, cy, width=width,
-                                                        height=height), lines=kept)
+        for image, estimate, truth in estimates_without(data, dropped):
             ok = estimate.error is None and estimate.confidence >= DEFAULT_MIN_CONFIDENCE
             errors = measure.image_errors(
                 measure.directions_from_pose(estimate.pose.pan, estimate.pose.tilt,
-                                             estimate.pose.roll) if ok else None,
-                truth_directions)
+                                             estimate.pose.roll) if ok else None, truth)
+            focal = estimate.focal
             photos.append(PhotoResult(image, "ok" if ok else "error", estimate.confidence,
                                       focal, "sidecar", focal, errors.vertical, errors.wall,
                                       estimate.error or ""))
@@ -438,6 +448,9 @@ def survey_photos(folder: Path, factors: tuple[float, ...] = FOCAL_FACTORS,
     from gsrwt_cli.api.estimate import DEFAULT_MIN_CONFIDENCE, detect_segments, estimate_pose
     from gsrwt_cli.geometry.camera import Intrinsics
 
+    sys.path.insert(0, str(OTHER_PHOTOS))
+    from make_real_photos import shrunk
+
     cv2.setNumThreads(1)
     found = []
     for path in sorted(p for p in folder.rglob("*") if p.suffix.lower() in
@@ -445,11 +458,8 @@ def survey_photos(folder: Path, factors: tuple[float, ...] = FOCAL_FACTORS,
         pixels = cv2.imread(str(path), cv2.IMREAD_COLOR)
         if pixels is None:
             continue
+        pixels = shrunk(pixels, long_side)
         height, width = pixels.shape[:2]
-        if max(height, width) > long_side:
-            scale = long_side / max(height, width)
-            width, height = round(width * scale), round(height * scale)
-            pixels = cv2.resize(pixels, (width, height), interpolation=cv2.INTER_AREA)
         lines = detect_segments(pixels)
         accepted = []
         for factor in (None, *factors):

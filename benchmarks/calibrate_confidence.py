@@ -40,7 +40,6 @@ from gsrwt_cli.api.estimate import (  # noqa: E402
     DEFAULT_MIN_CONFIDENCE,
     confidence_features,
     confidence_of,
-    detect_segments,
     estimate_pose,
 )
 from gsrwt_cli.geometry.camera import Intrinsics  # noqa: E402
@@ -96,23 +95,13 @@ def fit_logistic(features: np.ndarray, outcome: np.ndarray, prior: float = 1.0
 
 def frontal_views(data: Path) -> list[tuple[int, float, float, bool]]:
     """The York photos as walls seen about frontally: their detected segments less those
-    along the true wall normal (as ``bench_real_photos.py --two-directions`` makes them), the
-    focal length given. Per estimate whose frontal wall's normal is left with no segments of
+    along the true wall normal (``bench_real_photos.estimates_without``), the focal length
+    given. Per estimate whose frontal wall's normal is left with no segments of
     its own and that is not refused: the photo's index in sorted order, the logit of
     :func:`confidence_of` without the offset, the upright probability, and whether within 2
     degrees on both measures."""
     rows = []
-    for index, (image, truth) in enumerate(sorted(bench.read_truth(data).items())):
-        picture = cv2.imread(str(data / "images" / image), cv2.IMREAD_COLOR)
-        height, width = picture.shape[:2]
-        focal, cx, cy = (float(truth[key]) for key in ("focal_px", "cx", "cy"))
-        directions = bench.true_directions(truth)
-        lines = detect_segments(picture)
-        matrix = np.array([[focal, 0, cx], [0, focal, cy], [0, 0, 1.0]])
-        lines = lines[~measure.along_direction(lines, matrix, directions.wall,
-                                               bench.LEFT_OUT_PX)]
-        estimate = estimate_pose(picture, Intrinsics(focal, focal, cx, cy, width=width,
-                                                     height=height), lines=lines)
+    for index, (_, estimate, directions) in enumerate(bench.estimates_without(data, "wall")):
         if not estimate.ok or estimate.normal_seen:
             continue
         pose = estimate.pose

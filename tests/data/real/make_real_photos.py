@@ -37,10 +37,10 @@ LONG_SIDE = 640
 JPEG_QUALITY = 90
 
 
-def shrunk(image: np.ndarray) -> np.ndarray:
-    """``image`` with its longer side at most :data:`LONG_SIDE` (area averaging)."""
+def shrunk(image: np.ndarray, long_side: int = LONG_SIDE) -> np.ndarray:
+    """``image`` with its longer side at most ``long_side`` (area averaging)."""
     height, width = image.shape[:2]
-    factor = LONG_SIDE / max(height, width)
+    factor = long_side / max(height, width)
     if factor >= 1:
         return image
     size = (round(width * factor), round(height * factor))
