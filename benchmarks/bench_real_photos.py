@@ -263,6 +263,8 @@ def estimate_cpu_ms(data: Path, passes: int = IN_PROCESS_PASSES) -> float:
 #: :func:`evaluate_two_directions`: a detected segment within this many pixels (end-point
 #: distance) of a true direction's vanishing line is taken for one of its edges, and left out.
 LEFT_OUT_PX = 3.0
+#: The factors :func:`evaluate_smaller` shrinks the York photos by (480x360 and 320x240).
+SMALLER_FACTORS = (0.75, 0.5)
 
 
 def estimates_without(data: Path, dropped: str) -> Iterator[tuple[str, object,
@@ -325,6 +327,56 @@ def report_two_directions(runs: list[RunResult]) -> str:
         lines.append(f"  {run.name:34s} ok {len(ok)} of {len(run.photos)}, within 2 deg "
                      f"{within}, confidently wrong {len(run.confidently_wrong)}"
                      f"{': ' + wrong if wrong else ''}")
+    return "\n".join(lines)
+
+
+def evaluate_smaller(data: Path, factors: tuple[float, ...] = SMALLER_FACTORS
+                     ) -> list[RunResult]:
+    """The York photos shrunk by each of ``factors`` (area averaging; 0.5 makes 320x240),
+    their focal length and principal point scaled with them, estimated in this process with
+    the focal length given and measured as the photos as taken are."""
+    from gsrwt_cli.api.estimate import DEFAULT_MIN_CONFIDENCE, estimate_pose
+    from gsrwt_cli.geometry.camera import Intrinsics
+
+    cv2.setNumThreads(1)
+    runs = []
+    for factor in factors:
+        photos = []
+        for image, row in sorted(read_truth(data).items()):
+            pixels = cv2.imread(str(data / "images" / image))
+            height, width = pixels.shape[:2]
+            size = (round(width * factor), round(height * factor))
+            pixels = cv2.resize(pixels, size, interpolation=cv2.INTER_AREA)
+            focal, cx, cy = (float(row[key]) for key in ("focal_px", "cx", "cy"))
+            camera = Intrinsics(focal * factor, focal * factor, (cx + 0.5) * factor - 0.5,
+                                (cy + 0.5) * factor - 0.5, width=size[0], height=size[1])
+            estimate = estimate_pose(pixels, camera)
+            ok = estimate.error is None and estimate.confidence >= DEFAULT_MIN_CONFIDENCE
+            errors = measure.image_errors(
+                measure.directions_from_pose(estimate.pose.pan, estimate.pose.tilt,
+                                             estimate.pose.roll) if ok else None,
+                true_directions(row))
+            photos.append(PhotoResult(image, "ok" if ok else "error", estimate.confidence,
+                                      camera.focal, "sidecar", camera.focal, errors.vertical,
+                                      errors.wall, estimate.error or ""))
+        runs.append(RunResult(f"{size[0]}x{size[1]}", photos, 0.0, 0.0))
+    return runs
+
+
+def report_smaller(runs: list[RunResult]) -> str:
+    """The lines of :func:`evaluate_smaller`, as text."""
+    lines = ["York photos shrunk (in process, calibrated focal scaled with them): vertical "
+             "median / p90 / worst | wall normal | refused | confidently wrong"]
+    for run in runs:
+        vertical = measure.summarize(p.vertical for p in run.photos)
+        wall = measure.summarize(p.wall for p in run.photos)
+        wrong = ", ".join(f"{p.image} {p.vertical:.1f}/{p.wall:.1f} ({p.confidence:.2f})"
+                          for p in run.confidently_wrong)
+        refused = sum(p.status != "ok" for p in run.photos)
+        lines.append(f"  {run.name:8s} {vertical.median:5.2f} {vertical.p90:5.2f} "
+                     f"{vertical.worst:5.2f} | {wall.median:5.2f} {wall.p90:5.2f} "
+                     f"{wall.worst:5.2f} | {refused:2d} of {len(run.photos)} | "
+                     f"{len(run.confidently_wrong)}{': ' + wrong if wrong else ''}")
     return "\n".join(lines)
 
 
@@ -684,6 +736,8 @@ def main() -> None:
     parser.add_argument("--two-directions", action="store_true",
                         help="also the York photos with one horizontal direction's edges left "
                              "out (about a minute more)")
+    parser.add_argument("--smaller", action="store_true",
+                        help="also the York photos shrunk to 480x360 and 320x240")
     arguments = parser.parse_args()
     if arguments.survey is not None:
         surveyed = survey_photos(arguments.survey, long_side=arguments.long_side)
@@ -723,6 +777,9 @@ def main() -> None:
     if arguments.two_directions and not arguments.json:
         print()
         print(report_two_directions(evaluate_two_directions(data)))
+    if arguments.smaller and not arguments.json:
+        print()
+        print(report_smaller(evaluate_smaller(data)))
 
 
 if __name__ == "__main__":

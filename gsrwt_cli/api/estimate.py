@@ -61,11 +61,18 @@ from ..vision.edges import grey8
 MIN_SEGMENT_FRACTION = 0.02
 #: Fewer segments than this: nothing can be told.
 MIN_SEGMENTS = 8
-#: A direction is "found" when at least this many segments (and this fraction of them) meet in it.
+#: A direction is "found" when at least this many segments (and this fraction of them) meet in it
+#: and in no other direction of the frame (:func:`distinct_support`).
 MIN_DIRECTION_SEGMENTS = 5
 MIN_DIRECTION_FRACTION = 0.04
+#: A segment counts towards finding its direction only if its line turns at least this far
+#: from the line to each other direction's vanishing point (:func:`distinct_support`).
+DISTINCT_DEGREES = 10.0
 #: End-point distance (pixels at 640x480) within which a segment belongs to a direction.
 INLIER_PX = 1.5
+#: The diagonal, in pixels, of the image size the distance above is set at (640x480): a
+#: larger image has it scaled (:func:`inlier_distance`).
+REFERENCE_DIAGONAL = 800.0
 #: Scale of the Cauchy weights of the refinement, as a fraction of the inlier distance.
 CAUCHY_FRACTION = 0.25
 #: Hypotheses of the minimal-sample search, and the segments they are drawn from (the longest).
@@ -185,7 +192,8 @@ class PoseEstimate:
     ``focal_estimated``); ``confidence``: the chance, 0 to 1, that the pose is within 2 degrees
     (:func:`confidence_of`); ``segments``:
     straight segments fitted; ``inliers``: those that meet in one of the three directions;
-    ``directions``: how many of the three directions segments were found for;
+    ``directions``: how many of the three directions were found, each through segments no
+    other explains (:func:`distinct_support`);
     ``vanishing_points``: ``(col, row)`` in ideal (undistorted) pixels of the vertical, the
     wall's horizontal and the wall's normal, None where at infinity; ``world_from_camera``:
     the rotation (rows: up, wall-right, into-wall in the camera frame); ``lines``: ``(N, 4)``
@@ -263,6 +271,17 @@ def detect_segments(image: np.ndarray, min_length: float | None = None) -> np.nd
     order = np.argsort(-lengths, kind="stable")
     order = order[lengths[order] >= min_length][:MAX_SEGMENTS]
     return lines[order]
+
+
+def inlier_distance(width: int, height: int) -> float:
+    """The end-point distance in pixels within which a segment of a ``width`` x ``height``
+    image belongs to a direction: :data:`INLIER_PX` up to 640x480, in proportion to the
+    diagonal above, so that a segment of the same share of a larger image is judged at the
+    same angle. Not below: LSD's end points are no more precise in pixels in a smaller
+    image, and a tighter distance there let a butterfly's wings pass for structure (on the
+    York Urban photos shrunk to 320x240, 29 of 51 are refused as having no clear structure;
+    docs/REAL_PHOTOS.md)."""
+    return INLIER_PX * max(1.0, math.hypot(width, height) / REFERENCE_DIAGONAL)
 
 
 def _usable_segments(lines: np.ndarray) -> np.ndarray:
@@ -916,6 +935,52 @@ def _rotation_of(directions: np.ndarray, vertical: int, along: int, normal: int)
     return u @ vt
 
 
+def distinct_support(lines: np.ndarray, pixel_from_camera: np.ndarray, directions: np.ndarray,
+                     labels: np.ndarray, inlier_px: float,
+                     degrees: float = DISTINCT_DEGREES) -> np.ndarray:
+    """How many of each direction's segments (``labels``) tell it apart from the frame's
+    other two: ``(3,)`` counts, of the columns of ``directions``.
+
+    The frame is fitted to every segment within ``inlier_px`` of a direction; a direction is
+    *found* through the segments that could only be its own. A segment is left out of the
+    count
+    - when its line passes within ``degrees`` of another direction's vanishing point, as seen
+      from its middle: it fits that direction about as well. Tree trunks above a point on the
+      horizon meet the vertical and a direction receding towards that point alike, as do the
+      near-parallel edges of painted bands; ``degrees`` (10) is about the angle the inlier
+      distance allows the shortest segment kept (2 % of the diagonal, 16 px at 640x480), so
+      only a segment no inlier test could give to the other direction counts;
+    - when its own direction's vanishing point lies inside it (by more than ``inlier_px``
+      from either end): the image of a line running in a direction ends at that direction's
+      vanishing point (the pinhole image of ``P + t d`` as ``t`` grows) and never passes
+      it. Lines drawn through a point of a flat picture do.
+
+    ``lines``: ``(N, 4)`` ideal pixels; ``pixel_from_camera``: the camera's ``K`` in the
+    thesis's frame (the inverse of :func:`_camera_from_pixel`).
+    """
+    start, end = lines[:, :2], lines[:, 2:]
+    length = np.hypot(*(end - start).T)
+    along = (end - start) / np.where(length > 0, length, 1.0)[:, None]
+    middle = 0.5 * (start + end)
+    points = (pixel_from_camera @ directions).T  # (3, 3): each vanishing point, homogeneous
+    toward = points[None, :, :2] - middle[:, None, :] * points[None, :, 2:]  # (N, 3, 2)
+    norms = np.linalg.norm(toward, axis=2)
+    cosine = np.abs(np.einsum("nkc,nc->nk", toward, along)) / np.where(norms > 0, norms, 1.0)
+    cosine = np.where(norms > 0, cosine, 1.0)
+    own = np.maximum(labels, 0)
+    counted = labels >= 0
+    limit = math.cos(math.radians(degrees))
+    for k in range(3):
+        counted &= (own == k) | (cosine[:, k] < limit)
+    # where each segment's own vanishing point falls along it (finite points only)
+    point = points[own]
+    finite = np.abs(point[:, 2]) * 1e6 > np.linalg.norm(point[:, :2], axis=1)
+    reach = np.einsum("nc,nc->n", point[:, :2] / np.where(finite, point[:, 2], 1.0)[:, None]
+                      - start, along)
+    counted &= ~(finite & (reach > inlier_px) & (reach < length - inlier_px))
+    return np.bincount(own[counted], minlength=3)
+
+
 def frame_misfit(normals: np.ndarray, half: np.ndarray, directions: np.ndarray,
                  labels: np.ndarray, axes: tuple[int, ...]) -> float:
     """How far, in degrees, the segments of each of ``axes`` (columns of ``directions``), taken
@@ -1041,7 +1106,8 @@ def estimate_pose(
     segments then refine it where they pin it (:func:`_refined_focal`; a camera with a lens
     or non-square pixels is taken as given), and ``focal_estimated`` is set. Never raises for
     an image that cannot tell its pose: the result's ``error`` says why (``only 1 of 3
-    directions found, 14 segments``).
+    directions found, 14 segments (each needs 5 that meet in it and in no other); give the
+    pose``).
     """
     if wall not in WALL_CHOICES:
         raise ValueError(f"wall must be one of {', '.join(WALL_CHOICES)}, got {wall!r}")
@@ -1056,7 +1122,7 @@ def estimate_pose(
         return _failure(f"too few straight segments: {segments} (need {MIN_SEGMENTS})",
                         detected, segments)
     diagonal = math.hypot(width, height)
-    inlier_px = INLIER_PX * max(1.0, diagonal / 800.0)
+    inlier_px = inlier_distance(width, height)
     ideal = detected
     if camera is not None:
         camera = Intrinsics(camera.fx, camera.fy, camera.cx, camera.cy, camera.skew,
@@ -1163,7 +1229,8 @@ def _refusal(structure: float, uncertainty: FocalUncertainty | None,
              ) -> str | None:
     """Why a frame cannot be trusted, in words a user understands, or None; ``vertical``:
     :func:`vertical_ratio`; ``vertical_segments``: the segments that meet in the frame's
-    vertical and how many a direction needs to be found (:data:`MIN_DIRECTION_SEGMENTS`)."""
+    vertical and in no other of its directions (:func:`distinct_support`) and how many a
+    direction needs to be found (:data:`MIN_DIRECTION_SEGMENTS`)."""
     if structure < MIN_STRUCTURE_RATIO:
         return (f"no clear man-made structure: the straight segments fit three orthogonal "
                 f"directions only {structure:.1f} times as well as random ones do "
@@ -1172,8 +1239,9 @@ def _refusal(structure: float, uncertainty: FocalUncertainty | None,
         count = vertical_segments[0]
         runs = ("no segment runs" if count == 0 else
                 "only 1 segment runs" if count == 1 else f"only {count} segments run")
-        return (f"no vertical structure: {runs} along the vertical found (need "
-                f"{vertical_segments[1]}); give the pose, or guides (--verticals)")
+        return (f"no vertical structure: {runs} along the vertical found and no other "
+                f"direction (need {vertical_segments[1]}); give the pose, or guides "
+                "(--verticals)")
     if vertical < MIN_VERTICAL_RATIO:
         return (f"no vertical structure: the segments along the vertical found fit it only "
                 f"{vertical:.1f} times as well as a random direction (need "
@@ -1196,13 +1264,16 @@ def _estimate_known_focal(detected: np.ndarray, ideal: np.ndarray, camera: Intri
     ``uncertainty``: the estimated focal length's (None when given)."""
     normals, half = interpretation_planes(ideal, _camera_from_pixel(camera))
     frame = fit_manhattan_frame(normals, half, inlier_px)
-    support = frame.support()
+    pixel_from_camera = np.linalg.inv(_camera_from_pixel(camera))
+    support = distinct_support(ideal, pixel_from_camera, frame.directions, frame.labels,
+                               inlier_px)
     needed = max(MIN_DIRECTION_SEGMENTS, math.ceil(MIN_DIRECTION_FRACTION * segments))
     found = int((support >= needed).sum())
     structure = _structure_of(ideal, camera, normals, half, frame.directions, inlier_px)
     if found < 2:
-        return _failure(f"only {found} of 3 directions found, {segments} segments", detected,
-                        segments, found, camera.focal, estimated, frame.labels, structure,
+        return _failure(f"only {found} of 3 directions found, {segments} segments (each "
+                        f"needs {needed} that meet in it and in no other); give the pose",
+                        detected, segments, found, camera.focal, estimated, frame.labels, structure,
                         uncertainty)
     # the vertical and the frontal wall's normal whichever wall is reported: the refusals
     # and the confidence are the rotation's, not its naming's
@@ -1228,7 +1299,6 @@ def _estimate_known_focal(detected: np.ndarray, ideal: np.ndarray, camera: Intri
     normal_seen = bool(support[frontal[2]] >= MIN_DIRECTION_SEGMENTS)
     misfit = frame_misfit(normals, half, frame.directions, frame.labels,
                           (frontal[0], frontal[2] if normal_seen else frontal[1]))
-    pixel_from_camera = np.linalg.inv(_camera_from_pixel(camera))
     points: list[tuple[float, float] | None] = []
     relabel = -np.ones(len(frame.labels), dtype=int)
     for name_index, k in enumerate(order):

@@ -53,7 +53,6 @@ from .estimate import (
     CAUCHY_FRACTION,
     FOCAL_SIGMA_SCALE,
     GRID_HYPOTHESES,
-    INLIER_PX,
     MIN_SEGMENTS,
     PoseEstimate,
     _camera_from_pixel,
@@ -62,6 +61,7 @@ from .estimate import (
     estimate_pose,
     fit_manhattan_frame,
     golden_minimum,
+    inlier_distance,
     interpretation_planes,
 )
 
@@ -251,7 +251,7 @@ def lens_from_lines(image: np.ndarray, camera: Intrinsics, lines: np.ndarray | N
         return LinesLens(math.nan, math.inf, focal,
                          reason=f"too few straight segments: {len(detected)}")
     diagonal = math.hypot(width, height)
-    inlier_px = INLIER_PX * max(1.0, diagonal / 800.0)
+    inlier_px = inlier_distance(width, height)
     pinhole = Intrinsics(camera.fx, camera.fy, camera.cx, camera.cy, 0.0, width, height)
     search = _Search(detected, pinhole, inlier_px)
     scored = [search.grid_score(k1) for k1 in K1_GRID]
