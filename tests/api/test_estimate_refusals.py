@@ -253,26 +253,38 @@ def _corner_angles_and_sides(corners: np.ndarray) -> tuple[np.ndarray, np.ndarra
     return np.degrees(np.arccos(cosine)), np.hypot(*after.T)
 
 
-def test_a_newspaper_sudoku_comes_out_square(tmp_path):
+def test_a_newspaper_sudoku_comes_out_square_or_is_refused(tmp_path):
     """A sudoku grid is square. Photographed on a slightly curved newspaper page, tilted and
     with no focal length known (sudoku.jpg), its outer frame's corners are 85 to 97 degrees and
-    its sides 419 to 486 px; ``rectify --auto`` estimates the focal length and the pose from
-    the printed lines and the frame comes out square: corners within 3 degrees of 90, sides
-    within 6 % of one another. The page's normal has no edges of its own (a few segments of
-    the text pass near its vanishing point, and meet the grid's directions as well): the
-    misfit is the wall's horizontal's, not theirs (:func:`distinct_support`)."""
-    grey = cv2.imread(str(REAL / "sudoku.jpg"), cv2.IMREAD_GRAYSCALE)
-    angles, sides = _corner_angles_and_sides(_grid_corners(grey))
+    its sides 419 to 486 px. ``rectify --auto`` over it and seven copies with +-1 grey level of
+    seeded noise: a page shows two directions and no normal, and its focal length and tilt
+    trade off (765 to 989 px, tilt 14.0 or 18.5 degrees, from one copy to the next), so
+    some are refused for their confidence (2026-12-03: 3 of 8, and 5 of 8 before a direction
+    was found only through segments no other explains). Every copy it accepts comes out
+    square: corners within 3 degrees of 90, sides within 6 % of one another."""
+    photo = cv2.imread(str(REAL / "sudoku.jpg"))
+    angles, sides = _corner_angles_and_sides(_grid_corners(cv2.cvtColor(photo,
+                                                                         cv2.COLOR_BGR2GRAY)))
     assert np.abs(angles - 90).max() > 5 and sides.max() / sides.min() > 1.1  # as taken
     (tmp_path / "in").mkdir()
-    (tmp_path / "in" / "sudoku.jpg").write_bytes((REAL / "sudoku.jpg").read_bytes())
-    result = run_gsrwt("rectify", str(tmp_path / "in"), "--auto", "-o", str(tmp_path / "out"),
-                       "-q")
-    assert result.returncode == 0, result.stderr
-    rectified = cv2.imread(str(tmp_path / "out" / "sudoku.jpg"), cv2.IMREAD_GRAYSCALE)
-    angles, sides = _corner_angles_and_sides(_grid_corners(rectified))
-    assert np.abs(angles - 90).max() < 3, angles
-    assert sides.max() / sides.min() < 1.06, sides
+    cv2.imwrite(str(tmp_path / "in" / "sudoku.png"), photo)
+    for seed in range(7):
+        noise = np.random.default_rng(seed).integers(-1, 2, photo.shape)
+        cv2.imwrite(str(tmp_path / "in" / f"noisy{seed}.png"),
+                    np.clip(photo.astype(int) + noise, 0, 255).astype(np.uint8))
+    table = tmp_path / "auto.csv"
+    run_gsrwt("rectify", str(tmp_path / "in"), "--auto", "-o", str(tmp_path / "out"),
+              "--table", str(table), "-q")
+    rows = read_table(table)
+    accepted = [row["image"] for row in rows if row["status"] == "ok"]
+    assert accepted, rows
+    for row in rows:
+        assert row["status"] == "ok" or row["error"].startswith("confidence "), row
+    for image in accepted:
+        rectified = cv2.imread(str(tmp_path / "out" / Path(image).name), cv2.IMREAD_GRAYSCALE)
+        angles, sides = _corner_angles_and_sides(_grid_corners(rectified))
+        assert np.abs(angles - 90).max() < 3, (image, angles)
+        assert sides.max() / sides.min() < 1.06, (image, sides)
 
 
 def test_rectify_auto_refuses_them_too(tmp_path):
