@@ -48,7 +48,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import cv2
 import numpy as np
@@ -166,8 +166,12 @@ STRUCTURE_FOCAL_CAP = 1.25
 #: the 0.674 of a normal distribution), so it is scaled by it.
 FOCAL_SIGMA_SCALE = 2.9
 #: An estimated focal length is refused when moving it by one standard deviation turns the
-#: vertical or the wall by more than this many degrees (a pose this far off is wrong).
+#: vertical or the wall by more than this many degrees (a pose this far off is wrong), or
+#: when focal lengths further off that fit about as well do (:func:`other_fitting_focals`).
 MAX_FOCAL_DEGREES = 3.0
+#: :func:`other_fitting_focals` looks this many times the estimate either way (as far as
+#: :func:`polish_focal` searches).
+FOCAL_SEARCH_SPAN = 1.4
 
 #: How far, as a fraction (a standard deviation of the log), an EXIF focal length may be off
 #: the photo's: the millimetres are rounded, the sensor's size (or the 35 mm equivalent) is
@@ -827,6 +831,12 @@ class FocalUncertainty:
 
     sigma: float
     degrees: float
+    #: The focal lengths ``(low, high)`` in pixels within :data:`FOCAL_SEARCH_SPAN` of the
+    #: estimate that fit the segments about as well (:func:`other_fitting_focals`), and how
+    #: far the pose turns across them; None and 0 where not searched (a focal length given
+    #: or refined from EXIF).
+    other_focals: tuple[float, float] | None = None
+    other_degrees: float = 0.0
 
 
 def focal_uncertainty(ideal: np.ndarray, centre: np.ndarray, focal: float, inlier_px: float,
@@ -853,6 +863,41 @@ def focal_uncertainty(ideal: np.ndarray, centre: np.ndarray, focal: float, inlie
             cosine = min(1.0, abs(float(reference[row] @ moved[row])))
             degrees = max(degrees, math.degrees(math.acos(cosine)))
     return FocalUncertainty(sigma, degrees)
+
+
+def other_fitting_focals(ideal: np.ndarray, centre: np.ndarray, focal: float,
+                         inlier_px: float, steps: int = 13) -> FocalUncertainty:
+    """:func:`focal_uncertainty` of an estimated ``focal``, with the focal lengths further off
+    that fit about as well (``other_focals``, ``other_degrees``).
+
+    The local curvature tells how sharply the cost rises at ``focal``, not whether it falls
+    again further off: a page seen about frontally, with no edge receding from it, fits focal
+    lengths 25 % apart about equally (its tilt traded against the focal length), and the
+    curvature at either says 4 %. So the cost (:func:`_focal_cost`, its inliers held) is also
+    taken at ``steps`` focal lengths spread evenly in log within :data:`FOCAL_SEARCH_SPAN`
+    times ``focal`` either way. Those whose cost exceeds ``focal``'s by less than
+    ``FOCAL_SIGMA_SCALE ** 2 / 2`` (what a quadratic of the curvature behind ``sigma`` rises
+    at one ``sigma``) fit about as well; the pose's largest turn across them (the vertical
+    and the wall's normal, as lines) is ``other_degrees``."""
+    local = focal_uncertainty(ideal, centre, focal, inlier_px)
+    fitted = _focal_cost(ideal, centre, focal, inlier_px)
+    if fitted is None or not math.isfinite(local.degrees):
+        return local
+    cost = fitted[1]
+    log_focal = math.log(focal)
+    least, at = cost(log_focal)
+    reference, order = world_from_camera_of(at)
+    reach = math.log(FOCAL_SEARCH_SPAN)
+    fitting, degrees = [focal], 0.0
+    for offset in np.linspace(-reach, reach, steps):
+        value, directions = cost(log_focal + offset)
+        if value - least < 0.5 * FOCAL_SIGMA_SCALE**2:
+            fitting.append(focal * math.exp(offset))
+            moved = _rotation_of(directions, *order)
+            for row in (0, 2):
+                cosine = min(1.0, abs(float(reference[row] @ moved[row])))
+                degrees = max(degrees, math.degrees(math.acos(cosine)))
+    return replace(local, other_focals=(min(fitting), max(fitting)), other_degrees=degrees)
 
 
 # --------------------------------------------------------------------------------------------
@@ -1159,7 +1204,7 @@ def estimate_pose(
             "cannot tell the focal length: no two finite vanishing points of orthogonal "
             f"directions ({segments} segments); give the focal length", detected, segments,
             estimated=True)
-    uncertainty = focal_uncertainty(ideal, centre, focal, inlier_px)
+    uncertainty = other_fitting_focals(ideal, centre, focal, inlier_px)
     trial = Intrinsics(focal, focal, centre[0], centre[1], width=width, height=height)
     return _estimate_known_focal(detected, ideal, trial, inlier_px, segments, True, wall,
                                  uncertainty)
@@ -1253,6 +1298,11 @@ def _refusal(structure: float, uncertainty: FocalUncertainty | None,
         return (f"focal length not determinable from this view: +-"
                 f"{100 * math.expm1(uncertainty.sigma):.0f} % turns the pose by "
                 f"{uncertainty.degrees:.1f} deg; give the focal length")
+    if uncertainty is not None and uncertainty.other_degrees > MAX_FOCAL_DEGREES:
+        low, high = uncertainty.other_focals or (math.nan, math.nan)
+        return (f"focal length not determinable from this view: {low:.0f} to {high:.0f} px "
+                f"fit the lines about as well and turn the pose by "
+                f"{uncertainty.other_degrees:.1f} deg; give the focal length")
     return None
 
 
