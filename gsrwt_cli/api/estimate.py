@@ -756,8 +756,13 @@ def image_score(lines: np.ndarray, pixel_from_camera: np.ndarray, directions: np
     return float((lengths * np.maximum(0.0, 1.0 - (best / inlier_px) ** 2)).sum())
 
 
+#: What :func:`_focal_cost` gives: the frame fitted, and the cost (and refined directions) as
+#: a function of the log focal length.
+_FittedCost = tuple[ManhattanFrame, Callable[[float], tuple[float, np.ndarray]]]
+
+
 def _focal_cost(ideal: np.ndarray, centre: np.ndarray, focal: float, inlier_px: float
-                ) -> tuple[ManhattanFrame, Callable[[float], tuple[float, np.ndarray]]] | None:
+                ) -> _FittedCost | None:
     """The frame fitted at ``focal`` and the cost of its segments as a function of the log
     focal length: the refined frame's Cauchy cost (:func:`_image_cost`, the segments'
     negative log-likelihood under Cauchy noise) with the inliers held fixed, and the refined
@@ -840,10 +845,12 @@ class FocalUncertainty:
 
 
 def focal_uncertainty(ideal: np.ndarray, centre: np.ndarray, focal: float, inlier_px: float,
-                      step: float = 0.05) -> FocalUncertainty:
+                      step: float = 0.05, fitted: _FittedCost | None = None
+                      ) -> FocalUncertainty:
     """The uncertainty of an estimated focal length and what it does to the pose
-    (:class:`FocalUncertainty`); infinite when the cost does not curve up around ``focal``."""
-    fitted = _focal_cost(ideal, centre, focal, inlier_px)
+    (:class:`FocalUncertainty`); infinite when the cost does not curve up around ``focal``.
+    ``fitted``: :func:`_focal_cost` at ``focal``, when already taken."""
+    fitted = fitted or _focal_cost(ideal, centre, focal, inlier_px)
     if fitted is None:
         return FocalUncertainty(math.inf, math.inf)
     cost = fitted[1]
@@ -879,8 +886,8 @@ def other_fitting_focals(ideal: np.ndarray, centre: np.ndarray, focal: float,
     ``FOCAL_SIGMA_SCALE ** 2 / 2`` (what a quadratic of the curvature behind ``sigma`` rises
     at one ``sigma``) fit about as well; the pose's largest turn across them (the vertical
     and the wall's normal, as lines) is ``other_degrees``."""
-    local = focal_uncertainty(ideal, centre, focal, inlier_px)
     fitted = _focal_cost(ideal, centre, focal, inlier_px)
+    local = focal_uncertainty(ideal, centre, focal, inlier_px, fitted=fitted)
     if fitted is None or not math.isfinite(local.degrees):
         return local
     cost = fitted[1]
