@@ -887,8 +887,10 @@ def other_fitting_focals(ideal: np.ndarray, centre: np.ndarray, focal: float,
     at one ``sigma``) fit about as well; the pose's largest turn across them (the vertical
     and the wall's normal, as lines) is ``other_degrees``."""
     fitted = _focal_cost(ideal, centre, focal, inlier_px)
+    if fitted is None:
+        return FocalUncertainty(math.inf, math.inf)
     local = focal_uncertainty(ideal, centre, focal, inlier_px, fitted=fitted)
-    if fitted is None or not math.isfinite(local.degrees):
+    if not math.isfinite(local.degrees):
         return local
     cost = fitted[1]
     log_focal = math.log(focal)
@@ -1058,8 +1060,9 @@ def frame_misfit(normals: np.ndarray, half: np.ndarray, directions: np.ndarray,
     down by its segments); the other horizontal, its vanishing point usually far outside the
     image, is fitted loosely by its own segments (on the York Urban training photos up to 8
     degrees off where the pose is within 2 degrees), and weighing it too made the confidence
-    worse (docs/REAL_PHOTOS.md). Where no edge recedes from the camera (the normal has fewer
-    than :data:`MIN_DIRECTION_SEGMENTS` segments: a wall seen about frontally) the wall's
+    worse (docs/REAL_PHOTOS.md). Where no edge recedes from the camera (fewer than
+    :data:`MIN_DIRECTION_SEGMENTS` segments meet in the normal and in no other direction,
+    :func:`distinct_support`: a wall seen about frontally) the wall's
     horizontal alone pins the pan, and it is weighed instead."""
     misfit = 0.0
     for k in axes:
