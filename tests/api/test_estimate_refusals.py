@@ -45,7 +45,7 @@ YORK = ROOT.parent / "shared" / "data" / "york-urban-train"
 REASONS = ("too few straight segments", "only 1 of 3 directions found",
            "no clear man-made structure", "no vertical structure",
            "focal length not determinable from this view", "cannot tell the focal length",
-           "confidence ")
+           "the straight edges bend", "confidence ")
 
 
 def manifest() -> list[dict[str, str]]:
@@ -253,16 +253,18 @@ def _corner_angles_and_sides(corners: np.ndarray) -> tuple[np.ndarray, np.ndarra
     return np.degrees(np.arccos(cosine)), np.hypot(*after.T)
 
 
-def test_a_newspaper_sudoku_comes_out_square_or_is_refused(tmp_path):
+def test_a_newspaper_sudoku_is_refused_for_its_focal_length_or_comes_out_square(tmp_path):
     """A sudoku grid is square. Photographed on a slightly curved newspaper page, tilted and
     with no focal length known (sudoku.jpg), its outer frame's corners are 85 to 97 degrees and
     its sides 419 to 486 px. A page shows two directions and no normal, and its focal length
-    and tilt trade off: the photo fits 790 to 1046 px about as well, turning the pose 3.5
-    degrees, and ``rectify --auto`` refuses it for that (:func:`other_fitting_focals`; before,
-    it took 989 px at confidence 0.80). Seven copies with +-1 grey level of seeded noise land
-    at 765 to 989 px, tilt 14.0 or 18.5 degrees: some are refused, for their confidence or the
-    same reason, and every copy accepted comes out square: corners within 3 degrees of 90,
-    sides within 6 % of one another (both poses rectify a page alike)."""
+    and tilt trade off: the photo and seven copies with +-1 grey level of seeded noise land at
+    784 to 996 px, tilt 14.0 or 18.5 degrees, and each fits the other about as well once the
+    frame is refitted there (:func:`settle_focal`: 637 to 1054 px, the pose turned 3.6 to 4.6
+    degrees). ``rectify --auto`` refuses them for that. (With the inliers of the focal length
+    found held, the search saw it on 2 of the 8, and 3 copies were accepted, at confidence
+    0.50 to 0.77.) Any copy refused otherwise must be for its confidence, and any accepted
+    must come out square: corners within 3 degrees of 90, sides within 6 % of one another
+    (both poses rectify a page alike)."""
     photo = cv2.imread(str(REAL / "sudoku.jpg"))
     angles, sides = _corner_angles_and_sides(_grid_corners(cv2.cvtColor(photo,
                                                                          cv2.COLOR_BGR2GRAY)))
@@ -277,15 +279,15 @@ def test_a_newspaper_sudoku_comes_out_square_or_is_refused(tmp_path):
     run_gsrwt("rectify", str(tmp_path / "in"), "--auto", "-o", str(tmp_path / "out"),
               "--table", str(table), "-q")
     rows = {Path(row["image"]).name: row for row in read_table(table)}
-    assert rows["sudoku.png"]["error"].startswith(
-        "focal length not determinable from this view: "), rows["sudoku.png"]
-    assert " px fit the lines about as well and turn the pose by " in rows["sudoku.png"]["error"]
-    accepted = [image for image, row in rows.items() if row["status"] == "ok"]
-    assert accepted, rows
+    assert len(rows) == 8
+    traded = [image for image, row in rows.items() if row["error"].startswith(
+        "focal length not determinable from this view: ") and
+        " px fit the lines about as well and turn the pose by " in row["error"]]
+    assert "sudoku.png" in traded and len(traded) >= 6, rows
     for row in rows.values():
         assert row["status"] == "ok" or row["error"].startswith(
             ("confidence ", "focal length not determinable from this view: ")), row
-    for image in accepted:
+    for image in (image for image, row in rows.items() if row["status"] == "ok"):
         rectified = cv2.imread(str(tmp_path / "out" / image), cv2.IMREAD_GRAYSCALE)
         angles, sides = _corner_angles_and_sides(_grid_corners(rectified))
         assert np.abs(angles - 90).max() < 3, (image, angles)
@@ -351,3 +353,24 @@ def test_a_focal_length_the_view_cannot_tell_is_refused_and_given_it_is_right(tm
     assert row["status"] == "ok", row["error"]
     for angle in ("pan", "tilt", "roll"):
         assert float(row[angle]) == pytest.approx(float(truth[angle]), abs=1.0), angle
+
+
+@pytest.mark.skipif(not (YORK / "truth.csv").is_file(), reason=f"no York Urban data at {YORK}")
+@pytest.mark.parametrize("image", ["P1080015.jpg", "P1020819.jpg", "P1020833.jpg"])
+def test_a_focal_length_the_refitted_frame_fits_better_is_taken(tmp_path, image):
+    """York Urban photos with no EXIF whose focal length the polish (the inliers of the
+    frame fitted there held) left 10 to 48 % off their calibration (675 px): P1080015 at 775
+    px was accepted 3.5 and 4.7 degrees off (confidence 0.76), P1020819 at 1001 px and
+    P1020833 at 609 px were refused as not determinable. Refitted across 1.4 times either
+    way, each frame fits its segments better near 675 px (:func:`~gsrwt_cli.api.estimate.
+    settle_focal`): 2026-12-03, 679, 677 and 661 px, every angle within 2.1 degrees of the
+    truth's (the principal point taken as the centre is 13 px off the calibrated one)."""
+    truth = next(row for row in read_table(YORK / "truth.csv") if row["image"] == image)
+    bare = tmp_path / image.replace(".jpg", ".png")  # the pixels, no EXIF
+    cv2.imwrite(str(bare), cv2.imread(str(YORK / "images" / image)))
+    (row,) = read_table(run_gsrwt("estimate", str(bare), "-f", "csv").stdout)
+    assert row["focal_source"] == "estimated"
+    assert row["status"] == "ok", row["error"]
+    assert float(row["focal"]) == pytest.approx(float(truth["focal_px"]), rel=0.03)
+    for angle in ("pan", "tilt", "roll"):
+        assert float(row[angle]) == pytest.approx(float(truth[angle]), abs=2.5), angle
