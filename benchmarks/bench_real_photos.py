@@ -23,8 +23,9 @@ the estimate alone in this process (:func:`estimate_cpu_ms`).
 Then the photos of other kinds (``tests/data/real``): ``gsrwt estimate`` and ``rectify --auto``
 with no focal length, and ``gsrwt estimate`` given each photo a focal length of
 :data:`FOCAL_FACTORS` times its long side: which of those that must be refused get ``ok``.
-Last, OpenCV's chessboard photos (``tests/data/right*.jpg``), their calibration given: each
-board's plane taken as the wall and measured against its pose (:func:`evaluate_chessboards`).
+Last, OpenCV's chessboard photos (``tests/data/right*.jpg``), their calibration given and
+then not: each board's plane taken as the wall and measured against its pose
+(:func:`evaluate_chessboards`).
 
     python benchmarks/bench_real_photos.py [PATH-TO-york-urban-train] [--json] [--jobs N]
         [--two-directions]
@@ -493,11 +494,12 @@ def survey_photos(folder: Path, factors: tuple[float, ...] = FOCAL_FACTORS,
     """Any folder of photos whose orientation nobody measured (``*.jpg``, ``*.jpeg``,
     ``*.png`` in it and below): each shrunk as ``tests/data/real`` is (area averaging) to a
     long side of at most ``long_side`` pixels, then estimated in this process with no focal
-    length and with ``factors`` times its long side: per photo, the runs that gave a pose
-    (``none``, ``0.8`` ...) with its confidence and pan, tilt, roll. For photos that must be
-    refused (no man-made structure), every such run is a confidently wrong result to look
-    at."""
+    length (checked for a lens, as ``gsrwt estimate`` does with no camera) and with
+    ``factors`` times its long side: per photo, the runs that gave a pose (``none``, ``0.8``
+    ...) with its confidence and pan, tilt, roll. For photos that must be refused (no
+    man-made structure), every such run is a confidently wrong result to look at."""
     from gsrwt_cli.api.estimate import DEFAULT_MIN_CONFIDENCE, detect_segments, estimate_pose
+    from gsrwt_cli.api.lens_lines import checked_for_a_lens
     from gsrwt_cli.geometry.camera import Intrinsics
 
     sys.path.insert(0, str(OTHER_PHOTOS))
@@ -519,6 +521,8 @@ def survey_photos(folder: Path, factors: tuple[float, ...] = FOCAL_FACTORS,
             camera = None if focal is None else Intrinsics(
                 focal, focal, (width - 1) / 2, (height - 1) / 2, width=width, height=height)
             estimate = estimate_pose(pixels, camera, lines=lines)
+            if camera is None:
+                estimate = checked_for_a_lens(pixels, estimate)
             if estimate.error is None and estimate.confidence >= DEFAULT_MIN_CONFIDENCE:
                 pose = estimate.pose
                 accepted.append(f"{'none' if factor is None else f'{factor:g}'}: "
@@ -587,17 +591,20 @@ class BoardPhoto:
                                             measure.ImageErrors(self.vertical, self.wall))
 
 
-def evaluate_chessboards(folder: Path = BOARDS, jobs: int = 1) -> list[BoardPhoto]:
+def evaluate_chessboards(folder: Path = BOARDS, jobs: int = 1, calibrated: bool = True
+                         ) -> list[BoardPhoto]:
     """``gsrwt estimate`` over OpenCV's chessboard photos (``right*.jpg``) with their
-    calibration file (``right_camera.yml``), each board's plane taken as the wall and measured
-    against its pose (``right_poses.csv``)."""
+    calibration file (``right_camera.yml``), or with no camera at all (``calibrated``
+    False: the focal length estimated, and the lens, a wide angle of k1 -0.30, unknown),
+    each board's plane taken as the wall and measured against its pose
+    (``right_poses.csv``)."""
     with open(folder / "right_poses.csv", newline="") as file:
         poses = {row["image"]: [float(row[f"rvec_{c}"]) for c in "xyz"]
                  for row in csv.DictReader(file)}
     with tempfile.TemporaryDirectory(prefix="gsrwt-boards-") as temporary:
         rows, _, _ = run_estimate([folder / image for image in poses], None, jobs,
                                   Path(temporary) / "estimate.csv",
-                                  camera=folder / "right_camera.yml")
+                                  camera=folder / "right_camera.yml" if calibrated else None)
     photos = []
     for row in rows:
         image = Path(row["image"]).name
@@ -609,12 +616,14 @@ def evaluate_chessboards(folder: Path = BOARDS, jobs: int = 1) -> list[BoardPhot
     return photos
 
 
-def report_chessboards(photos: list[BoardPhoto]) -> str:
+def report_chessboards(photos: list[BoardPhoto], calibrated: bool = True) -> str:
     """The lines of :func:`evaluate_chessboards`, as text."""
     ok = [p for p in photos if p.status == "ok"]
     vertical = measure.summarize(p.vertical for p in ok)
     wall = measure.summarize(p.wall for p in ok)
-    lines = [f"chessboard photos (tests/data/right*.jpg, calibration given; the board's plane as "
+    given = ("calibration given" if calibrated else
+             "no calibration: focal length estimated, a k1 -0.30 lens unknown")
+    lines = [f"chessboard photos (tests/data/right*.jpg, {given}; the board's plane as "
              f"the wall, its pose by cv2.solvePnP): {len(ok)} of {len(photos)} ok, "
              f"{sum(measure.is_within(measure.ImageErrors(p.vertical, p.wall)) for p in ok)} "
              f"of them within 2 deg, confidently wrong: "
@@ -757,11 +766,13 @@ def main() -> None:
     others = evaluate_other_photos(OTHER_PHOTOS, arguments.jobs)
     given_focal = evaluate_other_photos_given_focal(OTHER_PHOTOS, arguments.jobs)
     boards = evaluate_chessboards(BOARDS, arguments.jobs)
+    uncalibrated = evaluate_chessboards(BOARDS, arguments.jobs, calibrated=False)
     if arguments.json:
         result = as_json(runs, data, arguments.jobs, in_process_ms)
         result["other_photos"] = [asdict(p) for p in others]
         result["other_photos_given_focal"] = [asdict(run) for run in given_focal]
         result["chessboards"] = [asdict(p) for p in boards]
+        result["chessboards_uncalibrated"] = [asdict(p) for p in uncalibrated]
         if arguments.two_directions:
             result["two_directions"] = [
                 {"name": run.name, "photos": [asdict(p) for p in run.photos]}
@@ -774,6 +785,7 @@ def main() -> None:
         print(report_given_focal(given_focal, others))
         print()
         print(report_chessboards(boards))
+        print(report_chessboards(uncalibrated, calibrated=False))
     if arguments.two_directions and not arguments.json:
         print()
         print(report_two_directions(evaluate_two_directions(data)))

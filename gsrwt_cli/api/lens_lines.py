@@ -51,8 +51,10 @@ from ..geometry.camera import Intrinsics
 from ..geometry.lens import Lens
 from .estimate import (
     CAUCHY_FRACTION,
+    DEFAULT_MIN_CONFIDENCE,
     FOCAL_SIGMA_SCALE,
     GRID_HYPOTHESES,
+    MAX_FOCAL_DEGREES,
     MIN_SEGMENTS,
     PoseEstimate,
     _camera_from_pixel,
@@ -149,10 +151,14 @@ def undistort_k1(pixels: np.ndarray, centre: tuple[float, float], fx: float, fy:
         return pixels.copy()
     radius = distorted.copy()  # Newton's steps from r_d approach the root from one side
     with np.errstate(all="ignore"):
-        for _ in range(30):
+        for _ in range(30):  # quadratic convergence: a few steps, unless near the fold
             value = radius * (1.0 + k1 * radius**2) - distorted
             slope = 1.0 + 3.0 * k1 * radius**2
-            radius = np.maximum(radius - value / np.where(slope > 1e-9, slope, 1e-9), 0.0)
+            stepped = np.maximum(radius - value / np.where(slope > 1e-9, slope, 1e-9), 0.0)
+            settled = np.all(np.abs(stepped - radius) <= 1e-12 * (1.0 + distorted))
+            radius = stepped
+            if settled:
+                break
         good = (np.abs(radius * (1.0 + k1 * radius**2) - distorted) < 1e-7 * (1 + distorted)
                 ) & (1.0 + 3.0 * k1 * radius**2 > 0)
         factor = np.where(distorted > 0, radius / np.where(distorted > 0, distorted, 1.0), 1.0)
@@ -375,3 +381,65 @@ def estimate_with_lens_from_lines(
         if not found.taken:
             return pinhole, found
     return estimate, found.at_focal(estimate.focal)
+
+
+def lens_doubt(image: np.ndarray, estimate: PoseEstimate,
+               principal_point: tuple[float, float] | None = None,
+               lines: np.ndarray | None = None) -> str | None:
+    """Why a pose estimated with no camera at all (``estimate_pose(image, None)``, its focal
+    length estimated, no lens) cannot be trusted because the image's lines show a lens, or
+    None.
+
+    An uncalibrated wide angle bends the edges away from the centre; the pinhole estimate
+    then takes bent pieces for directions of their own and the focal length from vanishing
+    points that are not there (OpenCV's chessboard photos, k1 -0.27 and -0.30: 10 of 26
+    accepted more than 3 degrees off; the same photos undistorted are right). So k1 is
+    estimated from the lines at the estimate's focal length (:func:`lens_from_lines`) and,
+    where it is :data:`MIN_SIGMAS` standard deviations or more from 0 (whether or not its
+    gate would take it as a lens), the pose is estimated again from the straightened
+    segments. The pinhole pose is doubted when that one turns its vertical or its wall's
+    normal by more than :data:`~gsrwt_cli.api.estimate.MAX_FOCAL_DEGREES` (each against
+    the nearest of the other frame's axes, as lines), or cannot be told (refused, or below
+    :data:`~gsrwt_cli.api.estimate.DEFAULT_MIN_CONFIDENCE`)."""
+    if not estimate.ok or estimate.focal is None or estimate.world_from_camera is None:
+        return None
+    image = np.asarray(image)
+    height, width = image.shape[:2]
+    cx, cy = principal_point or ((width - 1) / 2.0, (height - 1) / 2.0)
+    focal = estimate.focal
+    detected = detect_segments(image) if lines is None else lines
+    found = lens_from_lines(image, Intrinsics(focal, focal, cx, cy, width=width, height=height),
+                            detected)
+    if not (math.isfinite(found.k1) and abs(found.k1) >= MIN_SIGMAS * found.sigma):
+        return None
+    ideal = undistort_k1(detected.reshape(-1, 2), (cx, cy), focal, focal,
+                         found.k1).reshape(-1, 4)
+    straightened = estimate_pose(image, None, principal_point=(cx, cy),
+                                 lines=ideal[np.all(np.isfinite(ideal), axis=1)])
+    bends = (f"the straight edges bend (the lines show a lens: k1 {found.k1:+.3f} +- "
+             f"{found.sigma:.3f})")
+    if not straightened.ok or straightened.confidence < DEFAULT_MIN_CONFIDENCE:
+        return (f"{bends} and no pose holds with it; give the camera's calibration "
+                "(--camera)")
+    assert straightened.world_from_camera is not None
+    cosines = np.abs(estimate.world_from_camera[[0, 2]] @ straightened.world_from_camera.T)
+    turn = math.degrees(math.acos(min(1.0, float(cosines.max(axis=1).min()))))
+    if turn > MAX_FOCAL_DEGREES:
+        return (f"{bends} and straightened they turn the pose by {turn:.1f} deg; give the "
+                "camera's calibration (--camera)")
+    return None
+
+
+def checked_for_a_lens(image: np.ndarray, estimate: PoseEstimate,
+                       principal_point: tuple[float, float] | None = None,
+                       min_confidence: float = DEFAULT_MIN_CONFIDENCE) -> PoseEstimate:
+    """``estimate``, made with no camera at all, as it stands, or refused with
+    :func:`lens_doubt`'s reason (no pose, confidence 0) when it would be taken (no error,
+    confidence at least ``min_confidence``) and the lines doubt it."""
+    if not estimate.ok or estimate.confidence < min_confidence:
+        return estimate
+    doubt = lens_doubt(image, estimate, principal_point, estimate.lines)
+    if doubt is None:
+        return estimate
+    return replace(estimate, pose=None, world_from_camera=None, confidence=0.0,
+                   vanishing_points=(None, None, None), error=doubt)
