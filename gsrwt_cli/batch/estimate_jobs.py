@@ -161,8 +161,7 @@ def estimate_file(path: Path, values: Mapping[str, Any], where: str, options: Es
     spread = EXIF_FOCAL_SPREAD if source == "exif" and camera is not None else 0.0
     estimate = estimate_pose(image, camera, principal_point=principal_point, wall=options.wall,
                              focal_spread=spread)
-    if camera is None and estimate.ok and estimate.confidence >= options.min_confidence:
-        # no camera at all: an uncalibrated lens's bent edges can mislead the pinhole
+    if camera is None:  # no camera at all: an uncalibrated lens's bent edges mislead
         from ..api.lens_lines import checked_for_a_lens
 
         estimate = checked_for_a_lens(image, estimate, principal_point, options.min_confidence)

@@ -130,6 +130,11 @@ class EstimateFrames:
             principal_point = (view.cx, view.cy)
         estimate = estimate_pose(frame.pixels, camera, principal_point=principal_point,
                                  wall=self.options.wall)
+        if camera is None:  # no camera at all: an uncalibrated lens's bent edges mislead
+            from ..api.lens_lines import checked_for_a_lens
+
+            estimate = checked_for_a_lens(frame.pixels, estimate, principal_point,
+                                          self.options.min_confidence)
         row = estimate_row(estimate, source)
         try:
             checked(estimate, self.options)
