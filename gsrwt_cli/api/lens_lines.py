@@ -385,7 +385,8 @@ def estimate_with_lens_from_lines(
 
 def lens_doubt(image: np.ndarray, estimate: PoseEstimate,
                principal_point: tuple[float, float] | None = None,
-               lines: np.ndarray | None = None) -> str | None:
+               lines: np.ndarray | None = None, found: LinesLens | None = None
+               ) -> str | None:
     """Why a pose estimated with no camera at all (``estimate_pose(image, None)``, its focal
     length estimated, no lens) cannot be trusted because the image's lines show a lens, or
     None.
@@ -400,7 +401,8 @@ def lens_doubt(image: np.ndarray, estimate: PoseEstimate,
     segments. The pinhole pose is doubted when that one turns its vertical or its wall's
     normal by more than :data:`~gsrwt_cli.api.estimate.MAX_FOCAL_DEGREES` (each against
     the nearest of the other frame's axes, as lines), or cannot be told (refused, or below
-    :data:`~gsrwt_cli.api.estimate.DEFAULT_MIN_CONFIDENCE`)."""
+    :data:`~gsrwt_cli.api.estimate.DEFAULT_MIN_CONFIDENCE`). ``found``: that k1, when
+    already searched (used if at the estimate's focal length)."""
     if not estimate.ok or estimate.focal is None or estimate.world_from_camera is None:
         return None
     image = np.asarray(image)
@@ -408,8 +410,9 @@ def lens_doubt(image: np.ndarray, estimate: PoseEstimate,
     cx, cy = principal_point or ((width - 1) / 2.0, (height - 1) / 2.0)
     focal = estimate.focal
     detected = detect_segments(image) if lines is None else lines
-    found = lens_from_lines(image, Intrinsics(focal, focal, cx, cy, width=width, height=height),
-                            detected)
+    if found is None or found.focal != focal:
+        found = lens_from_lines(image, Intrinsics(focal, focal, cx, cy, width=width,
+                                                  height=height), detected)
     if not (math.isfinite(found.k1) and abs(found.k1) >= MIN_SIGMAS * found.sigma):
         return None
     ideal = undistort_k1(detected.reshape(-1, 2), (cx, cy), focal, focal,
@@ -432,13 +435,15 @@ def lens_doubt(image: np.ndarray, estimate: PoseEstimate,
 
 def checked_for_a_lens(image: np.ndarray, estimate: PoseEstimate,
                        principal_point: tuple[float, float] | None = None,
-                       min_confidence: float = DEFAULT_MIN_CONFIDENCE) -> PoseEstimate:
+                       min_confidence: float = DEFAULT_MIN_CONFIDENCE,
+                       found: LinesLens | None = None) -> PoseEstimate:
     """``estimate``, made with no camera at all, as it stands, or refused with
     :func:`lens_doubt`'s reason (no pose, confidence 0) when it would be taken (no error,
-    confidence at least ``min_confidence``) and the lines doubt it."""
+    confidence at least ``min_confidence``) and the lines doubt it (``found``: their k1,
+    when already searched)."""
     if not estimate.ok or estimate.confidence < min_confidence:
         return estimate
-    doubt = lens_doubt(image, estimate, principal_point, estimate.lines)
+    doubt = lens_doubt(image, estimate, principal_point, estimate.lines, found)
     if doubt is None:
         return estimate
     return replace(estimate, pose=None, world_from_camera=None, confidence=0.0,

@@ -146,10 +146,16 @@ def estimate_file(path: Path, values: Mapping[str, Any], where: str, options: Es
         raise ValueError(f"the parameters say {camera.width}x{camera.height} pixels but the "
                          f"image is {width}x{height}")
     if options.lens_from_lines and lens["lens_source"] == "none":
-        from ..api.lens_lines import estimate_with_lens_from_lines  # only when asked for
+        from ..api.lens_lines import (  # only when asked for
+            checked_for_a_lens,
+            estimate_with_lens_from_lines,
+        )
 
         estimate, found = estimate_with_lens_from_lines(
             image, camera, principal_point=principal_point, wall=options.wall)
+        if camera is None and not found.taken:  # the pinhole's: as without the option
+            estimate = checked_for_a_lens(image, estimate, principal_point,
+                                          options.min_confidence, found)
         lens = {**lens, "lines": found}
         if found.taken:
             lens["lens_source"] = "lines"

@@ -93,3 +93,21 @@ def test_lens_columns_take_precedence(photos: Path, tmp_path: Path):
     assert done.returncode == 0, done.stderr
     row = read_table(done.stdout)[0]
     assert row["lens_source"] == "sidecar" and row["lens_lines"] in ("", None)
+
+
+def test_a_lens_the_gate_refuses_still_refuses_a_pose_it_turns():
+    """OpenCV's webcam chessboard photos with no camera: the lines' k1 of right06 (-0.263,
+    40 standard deviations) folds back within the image and right09's (-0.34 +- 0.06) is not
+    pinned down to 0.01, so ``--lens-from-lines`` takes neither lens. Their pinhole poses,
+    5.5 and 24 degrees off the board, were then written ``ok``; straightened, the pose turns
+    by 22 and 25 degrees, and they are refused as without the option
+    (:func:`~gsrwt_cli.api.lens_lines.checked_for_a_lens`), with the lens's evidence kept."""
+    data = Path(__file__).resolve().parents[1] / "data"
+    result = run_gsrwt("estimate", str(data / "right06.jpg"), str(data / "right09.jpg"),
+                       "--lens-from-lines", "-f", "csv")
+    assert result.returncode == 1, result.stderr
+    for row in read_table(result.stdout):
+        assert row["status"] == "error" and row["lens_source"] == "none"
+        assert row["lens_lines"].startswith("refused: ")
+        assert row["error"].startswith("the straight edges bend (the lines show a lens: k1 -0.")
+        assert " and straightened they turn the pose by " in row["error"]
