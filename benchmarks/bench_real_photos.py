@@ -23,9 +23,9 @@ the estimate alone in this process (:func:`estimate_cpu_ms`).
 Then the photos of other kinds (``tests/data/real``): ``gsrwt estimate`` and ``rectify --auto``
 with no focal length, and ``gsrwt estimate`` given each photo a focal length of
 :data:`FOCAL_FACTORS` times its long side: which of those that must be refused get ``ok``.
-Last, OpenCV's chessboard photos (``tests/data/right*.jpg``), their calibration given and
-then not: each board's plane taken as the wall and measured against its pose
-(:func:`evaluate_chessboards`).
+Last, OpenCV's chessboard photos of its two webcams (``tests/data/right*.jpg``,
+``left*.jpg``), their calibration given and then not: each board's plane taken as the wall
+and measured against its pose (:func:`evaluate_chessboards`).
 
     python benchmarks/bench_real_photos.py [PATH-TO-york-urban-train] [--json] [--jobs N]
         [--two-directions]
@@ -591,20 +591,29 @@ class BoardPhoto:
                                             measure.ImageErrors(self.vertical, self.wall))
 
 
-def evaluate_chessboards(folder: Path = BOARDS, jobs: int = 1, calibrated: bool = True
-                         ) -> list[BoardPhoto]:
-    """``gsrwt estimate`` over OpenCV's chessboard photos (``right*.jpg``) with their
-    calibration file (``right_camera.yml``), or with no camera at all (``calibrated``
-    False: the focal length estimated, and the lens, a wide angle of k1 -0.30, unknown),
-    each board's plane taken as the wall and measured against its pose
-    (``right_poses.csv``)."""
-    with open(folder / "right_poses.csv", newline="") as file:
+#: OpenCV's two webcams of its stereo sample: the folder of each one's photos (with its
+#: ``right_poses.csv`` or ``left_poses.csv``) and its calibration file.
+BOARD_CAMERAS = {"right": (BOARDS, BOARDS / "right_camera.yml"),
+                 "left": (BOARDS / "left", BOARDS / "opencv4_left_intrinsics.yml")}
+
+
+def evaluate_chessboards(folder: Path | None = None, jobs: int = 1, calibrated: bool = True,
+                         camera: str = "right") -> list[BoardPhoto]:
+    """``gsrwt estimate`` over OpenCV's chessboard photos of one webcam (``right*.jpg`` or
+    ``left/left*.jpg``; ``folder``: others of the same names) with its calibration file
+    (:data:`BOARD_CAMERAS`), or with no camera at all (``calibrated`` False: the focal
+    length estimated, and the lens, a wide angle of k1 -0.30 or -0.27, unknown), each
+    board's plane taken as the wall and measured against its pose (``right_poses.csv``,
+    ``left_poses.csv``)."""
+    own_folder, calibration = BOARD_CAMERAS[camera]
+    folder = own_folder if folder is None else folder
+    with open(folder / f"{camera}_poses.csv", newline="") as file:
         poses = {row["image"]: [float(row[f"rvec_{c}"]) for c in "xyz"]
                  for row in csv.DictReader(file)}
     with tempfile.TemporaryDirectory(prefix="gsrwt-boards-") as temporary:
         rows, _, _ = run_estimate([folder / image for image in poses], None, jobs,
                                   Path(temporary) / "estimate.csv",
-                                  camera=folder / "right_camera.yml" if calibrated else None)
+                                  camera=calibration if calibrated else None)
     photos = []
     for row in rows:
         image = Path(row["image"]).name
@@ -616,14 +625,16 @@ def evaluate_chessboards(folder: Path = BOARDS, jobs: int = 1, calibrated: bool 
     return photos
 
 
-def report_chessboards(photos: list[BoardPhoto], calibrated: bool = True) -> str:
+def report_chessboards(photos: list[BoardPhoto], calibrated: bool = True,
+                       camera: str = "right") -> str:
     """The lines of :func:`evaluate_chessboards`, as text."""
     ok = [p for p in photos if p.status == "ok"]
     vertical = measure.summarize(p.vertical for p in ok)
     wall = measure.summarize(p.wall for p in ok)
     given = ("calibration given" if calibrated else
-             "no calibration: focal length estimated, a k1 -0.30 lens unknown")
-    lines = [f"chessboard photos (tests/data/right*.jpg, {given}; the board's plane as "
+             "no calibration: focal length estimated, the lens unknown")
+    where = "right*.jpg" if camera == "right" else "left/left*.jpg"
+    lines = [f"chessboard photos (tests/data/{where}, {given}; the board's plane as "
              f"the wall, its pose by cv2.solvePnP): {len(ok)} of {len(photos)} ok, "
              f"{sum(measure.is_within(measure.ImageErrors(p.vertical, p.wall)) for p in ok)} "
              f"of them within 2 deg, confidently wrong: "
@@ -765,14 +776,17 @@ def main() -> None:
     in_process_ms = estimate_cpu_ms(data)
     others = evaluate_other_photos(OTHER_PHOTOS, arguments.jobs)
     given_focal = evaluate_other_photos_given_focal(OTHER_PHOTOS, arguments.jobs)
-    boards = evaluate_chessboards(BOARDS, arguments.jobs)
-    uncalibrated = evaluate_chessboards(BOARDS, arguments.jobs, calibrated=False)
+    boards = {(camera, calibrated): evaluate_chessboards(None, arguments.jobs, calibrated,
+                                                         camera)
+              for camera in BOARD_CAMERAS for calibrated in (True, False)}
     if arguments.json:
         result = as_json(runs, data, arguments.jobs, in_process_ms)
         result["other_photos"] = [asdict(p) for p in others]
         result["other_photos_given_focal"] = [asdict(run) for run in given_focal]
-        result["chessboards"] = [asdict(p) for p in boards]
-        result["chessboards_uncalibrated"] = [asdict(p) for p in uncalibrated]
+        result["chessboards"] = [asdict(p) for p in boards["right", True]]
+        result["chessboards_uncalibrated"] = [asdict(p) for p in boards["right", False]]
+        result["left_chessboards"] = [asdict(p) for p in boards["left", True]]
+        result["left_chessboards_uncalibrated"] = [asdict(p) for p in boards["left", False]]
         if arguments.two_directions:
             result["two_directions"] = [
                 {"name": run.name, "photos": [asdict(p) for p in run.photos]}
@@ -784,8 +798,8 @@ def main() -> None:
         print(report_other_photos(others))
         print(report_given_focal(given_focal, others))
         print()
-        print(report_chessboards(boards))
-        print(report_chessboards(uncalibrated, calibrated=False))
+        for (camera, calibrated), photos in boards.items():
+            print(report_chessboards(photos, calibrated, camera))
     if arguments.two_directions and not arguments.json:
         print()
         print(report_two_directions(evaluate_two_directions(data)))

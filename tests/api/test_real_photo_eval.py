@@ -297,26 +297,49 @@ def test_chessboard_photos_are_right_or_refused():
     assert all(p.error for p in boards if p.status != "ok")
 
 
+def test_the_other_webcams_chessboard_photos_are_right_or_the_rooms():
+    """OpenCV's left webcam's 13 chessboard photos (tests/data/left) with OpenCV's own
+    calibration of it (``opencv4_left_intrinsics.yml``), measured as the right ones are.
+    2026-12-03: 9 get a pose, 7 within 2 degrees of the board (vertical 0.06 to 0.37, wall
+    0.21 to 0.63). left01 and left06 are 10.5 and 10.4 degrees off it (confidence 0.85 and
+    0.69): their frame is the room's (the monitor's and the cabinet's verticals, the
+    keyboard's and the desk's receding edges), and the board is held 10 and 24 degrees from
+    the room's axes: which plane a photo's pose is of, its lines cannot tell. Floors at
+    today's figures."""
+    boards = bench_real_photos.evaluate_chessboards(camera="left")
+    assert len(boards) == 13
+    ok = [p for p in boards if p.status == "ok"]
+    within = [p for p in ok if measure.is_within(measure.ImageErrors(p.vertical, p.wall))]
+    assert len(within) >= 7
+    assert {p.image for p in boards if p.confidently_wrong} <= {"left01.jpg", "left06.jpg"}
+    assert all(p.error for p in boards if p.status != "ok")
+
+
 def test_chessboard_photos_with_no_camera_bend_and_are_refused_straightened_they_are_not(
         tmp_path):
-    """The same 13 photos with no camera given: their webcam's lens bends straight edges
-    (k1 -0.30 in its calibration), the pinhole estimate takes bent pieces for directions
-    and the focal length from vanishing points that are not there, and before the lens was
-    looked for 6 were accepted 5 to 32 degrees off the board (confidence 0.58 to 0.85).
-    Now the lines' lens (:func:`~gsrwt_cli.api.lens_lines.lens_doubt`) turns right03,
-    right06 and right09 by 4.9 to 25 degrees, and they are refused for it (2026-12-03: 3
-    still accepted and off, right02, right08 and right11, whose straightened pose is within
-    3 degrees of the bent one, or whose k1 the lines do not pin down). Undistorted by
+    """The same 13 photos, and the other webcam's 13, with no camera given: their lenses
+    bend straight edges (k1 -0.30 and -0.27 in their calibrations), the pinhole estimate
+    takes bent pieces for directions and the focal length from vanishing points that are
+    not there, and before the lens was looked for 6 right and 4 left were accepted 3.4 to 32
+    degrees off the board (confidence 0.58 to 0.85). Now the lines' lens
+    (:func:`~gsrwt_cli.api.lens_lines.lens_doubt`) turns right03, right06 and right09 by
+    4.9 to 25 degrees, and left02, left05 and left09 tell no pose straightened: they are
+    refused for it (2026-12-03: 3 right and 1 left still accepted and off, right02, right08,
+    left08 and right11, whose straightened pose is within 3 degrees of the bent one, or whose
+    k1 the lines do not pin down). Undistorted by
     OpenCV with their calibration and still given no camera, the lines show no lens: none is
     refused for it, and most of those accepted are within 2 degrees (7 accepted, 5 within;
     right05 is 6.6 off, the principal point taken as the centre is 12 px off)."""
     taken = bench_real_photos.evaluate_chessboards(calibrated=False)
-    bent = {p.image for p in taken if p.error.startswith("the straight edges bend (the lines "
-                                                         "show a lens: k1 ")}
-    assert {"right03.jpg", "right06.jpg", "right09.jpg"} <= bent
+    left = bench_real_photos.evaluate_chessboards(calibrated=False, camera="left")
+    bent = {p.image for p in taken + left
+            if p.error.startswith("the straight edges bend (the lines show a lens: k1 ")}
+    assert {"right03.jpg", "right06.jpg", "right09.jpg", "left02.jpg", "left05.jpg",
+            "left09.jpg"} <= bent
     assert all(p.error.endswith("give the camera's calibration (--camera)") for p in taken
-               if p.image in bent)
+               + left if p.image in bent)
     assert sum(p.confidently_wrong for p in taken) <= 3
+    assert sum(p.confidently_wrong for p in left) <= 1
     storage = cv2.FileStorage(str(DATA / "right_camera.yml"), cv2.FILE_STORAGE_READ)
     matrix = storage.getNode("camera_matrix").mat()
     distortion = storage.getNode("distortion_coefficients").mat()
