@@ -127,6 +127,14 @@ def orientation_of(path: Path, options: EstimateOptions) -> int:
     return 1 if options.orientation == "ignore" else file_orientation(path)
 
 
+def _lens_unknown(camera: Intrinsics | None, source: str) -> bool:
+    """Whether an estimate is checked for a lens nobody calibrated
+    (:func:`~gsrwt_cli.api.lens_lines.checked_for_a_lens`): with no camera at all, or a focal
+    length from EXIF and no lens (from a calibration file or lensfun). A focal length given
+    (``--focal``, a sidecar, a calibration file) is taken as the pinhole's it says."""
+    return camera is None or (source == "exif" and camera.lens is None)
+
+
 def estimate_file(path: Path, values: Mapping[str, Any], where: str, options: EstimateOptions
                   ) -> tuple[PoseEstimate, Intrinsics | None, str, np.ndarray, dict[str, Any]]:
     """Read ``path`` and estimate its pose: the estimate, the camera it was given (None when
@@ -153,9 +161,9 @@ def estimate_file(path: Path, values: Mapping[str, Any], where: str, options: Es
 
         estimate, found = estimate_with_lens_from_lines(
             image, camera, principal_point=principal_point, wall=options.wall)
-        if camera is None and not found.taken:  # the pinhole's: as without the option
+        if _lens_unknown(camera, source) and not found.taken:  # as without the option
             estimate = checked_for_a_lens(image, estimate, principal_point,
-                                          options.min_confidence, found)
+                                          options.min_confidence, found, camera)
         lens = {**lens, "lines": found}
         if found.taken:
             lens["lens_source"] = "lines"
@@ -167,10 +175,11 @@ def estimate_file(path: Path, values: Mapping[str, Any], where: str, options: Es
     spread = EXIF_FOCAL_SPREAD if source == "exif" and camera is not None else 0.0
     estimate = estimate_pose(image, camera, principal_point=principal_point, wall=options.wall,
                              focal_spread=spread)
-    if camera is None:  # no camera at all: an uncalibrated lens's bent edges mislead
+    if _lens_unknown(camera, source):  # an uncalibrated lens's bent edges mislead
         from ..api.lens_lines import checked_for_a_lens
 
-        estimate = checked_for_a_lens(image, estimate, principal_point, options.min_confidence)
+        estimate = checked_for_a_lens(image, estimate, principal_point, options.min_confidence,
+                                      camera=camera)
     if spread and camera is not None and estimate.focal_estimated and estimate.focal:
         camera = Intrinsics(estimate.focal, estimate.focal, camera.cx, camera.cy, camera.skew,
                             camera.width, camera.height, camera.lens)
