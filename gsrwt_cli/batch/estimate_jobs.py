@@ -130,9 +130,11 @@ def orientation_of(path: Path, options: EstimateOptions) -> int:
 def _lens_unknown(camera: Intrinsics | None, source: str) -> bool:
     """Whether an estimate is checked for a lens nobody calibrated
     (:func:`~gsrwt_cli.api.lens_lines.checked_for_a_lens`): with no camera at all, or a focal
-    length from EXIF and no lens (from a calibration file or lensfun). A focal length given
-    (``--focal``, a sidecar, a calibration file) is taken as the pinhole's it says."""
-    return camera is None or (source == "exif" and camera.lens is None)
+    length from EXIF, square pixels and no lens (from a calibration file or lensfun). A focal
+    length given (``--focal``, a sidecar, a calibration file) is taken as the pinhole's it
+    says."""
+    return camera is None or (source == "exif" and camera.lens is None
+                              and camera.fx == camera.fy and camera.skew == 0)
 
 
 def estimate_file(path: Path, values: Mapping[str, Any], where: str, options: EstimateOptions
