@@ -882,13 +882,16 @@ def focal_uncertainty(ideal: np.ndarray, centre: np.ndarray, focal: float, inlie
     if not sigma < 1.0:  # e times either way: nothing pinned (and no camera to try there)
         return FocalUncertainty(sigma, math.inf)
     reference, order = world_from_camera_of(at)
-    degrees = 0.0
-    for sign in (-1.0, 1.0):
-        moved = _rotation_of(cost(log_focal + sign * sigma)[1], *order)
-        for row in (0, 2):  # the vertical and the wall's normal, as lines
-            cosine = min(1.0, abs(float(reference[row] @ moved[row])))
-            degrees = max(degrees, math.degrees(math.acos(cosine)))
+    degrees = max(_pose_turn(reference, _rotation_of(cost(log_focal + sign * sigma)[1], *order))
+                  for sign in (-1.0, 1.0))
     return FocalUncertainty(sigma, degrees)
+
+
+def _pose_turn(reference: np.ndarray, moved: np.ndarray) -> float:
+    """Degrees the vertical or the wall's normal (rows 0 and 2 of two ``world_from_camera``
+    rotations, as lines) turns from ``reference`` to ``moved``, whichever turns more."""
+    cosine = min(1.0, float(np.abs((reference[[0, 2]] * moved[[0, 2]]).sum(axis=1)).min()))
+    return math.degrees(math.acos(cosine))
 
 
 def _refitted(ideal: np.ndarray, centre: np.ndarray, focal: float, inlier_px: float,
@@ -965,10 +968,7 @@ def settle_focal(ideal: np.ndarray, centre: np.ndarray, focal: float, inlier_px:
     for other, value, directions in scanned:
         if value - least < 0.5 * FOCAL_SIGMA_SCALE**2:
             fitting.append(other)
-            moved = _rotation_of(directions, *order)
-            for row in (0, 2):
-                cosine = min(1.0, abs(float(reference[row] @ moved[row])))
-                degrees = max(degrees, math.degrees(math.acos(cosine)))
+            degrees = max(degrees, _pose_turn(reference, _rotation_of(directions, *order)))
     return focal, replace(local, other_focals=(min(fitting), max(fitting)),
                           other_degrees=degrees)
 
