@@ -9,10 +9,32 @@ whose count is not known until the stream ends, are put in order as they are dec
 
 from __future__ import annotations
 
-from collections.abc import Callable, Collection, Generator
+import contextlib
+from collections.abc import Callable, Collection, Generator, Iterator
 from typing import Any
 
 Row = dict[str, Any]
+
+_rows_in_hand = 0
+
+
+@contextlib.contextmanager
+def row_in_hand() -> Iterator[None]:
+    """A row taken from the waiting ones and being written: a stop that comes meanwhile
+    (the signal handler of :func:`~gsrwt_cli.cli.batch_run.stop_on_signals` asks
+    :func:`a_row_is_in_hand`) waits until the row is out, so that it is neither lost nor
+    written twice. Exceptions raised by the writing itself still go on at once."""
+    global _rows_in_hand
+    _rows_in_hand += 1
+    try:
+        yield
+    finally:
+        _rows_in_hand -= 1
+
+
+def a_row_is_in_hand() -> bool:
+    """Whether the main thread is inside :func:`row_in_hand`."""
+    return _rows_in_hand > 0
 
 
 def run_in_order(
@@ -36,8 +58,9 @@ def run_in_order(
     If anything stops the run (an exception such as ``KeyboardInterrupt``, from the results
     or from ``on_row``), ``results`` is closed (which stops its workers), every index not yet
     out gets its row (``parent_row`` for the parent's, ``stopped_row`` for the others) and
-    the exception goes on. An index counts as out before ``on_row`` sees its row, so a stop
-    inside ``on_row`` never rows an image twice.
+    the exception goes on. An index counts as out before ``on_row`` sees its row, so an
+    exception raised by ``on_row`` never rows an image twice, and a signal's stop waits until
+    the row is written (:func:`row_in_hand`), so it never loses one.
     """
     rows: dict[int, Row] = {}
     following = 0
@@ -58,9 +81,10 @@ def run_in_order(
                     rows[index] = stopped_row(index)
                 else:
                     return
-            row = rows.pop(index)
-            following += 1
-            on_row(row)
+            with row_in_hand():
+                row = rows.pop(index)
+                following += 1
+                on_row(row)
 
     try:
         emit()

@@ -68,6 +68,7 @@ from .frame_sources import (
     SourceEndedError,
     StreamFrame,
 )
+from .in_order import row_in_hand
 from .job_errors import JobError, error_text
 from .rectify_jobs import NOT_MADE_SO, Counts
 from .settings import Settings
@@ -613,8 +614,9 @@ def _run(job: StreamJob, settings: Settings, processes: int, source: FrameSource
                 jobs_out.pop(following, None)
                 if on_progress is not None:
                     on_progress()
-                deliver(waiting.pop(following))
-                following += 1
+                with row_in_hand():
+                    deliver(waiting.pop(following))
+                    following += 1
     except BaseException:
         results.close()
         for index in sorted(set(jobs_out) | set(waiting)):

@@ -14,6 +14,7 @@ from typing import IO, Any
 
 import click
 
+from ..batch.in_order import a_row_is_in_hand
 from ..io.outputs import open_atomic
 from ..io.storage import location
 
@@ -85,15 +86,16 @@ def _inside_a_dask_client_call(frame: FrameType | None) -> bool:
 @contextlib.contextmanager
 def stop_on_signals() -> Iterator[None]:
     """SIGINT raises KeyboardInterrupt and SIGTERM raises :class:`Terminated`, once, in the
-    main thread, outside any Dask client call (:func:`_inside_a_dask_client_call`).
+    main thread, outside any Dask client call (:func:`_inside_a_dask_client_call`) and
+    outside the writing of a row (:func:`~gsrwt_cli.batch.in_order.row_in_hand`).
 
     After the first, both are ignored until the block ends, so that the table of what
     finished is written whole even if the user presses Ctrl-C again.
     """
 
     def stop(signum: int, frame: FrameType | None) -> None:
-        if _inside_a_dask_client_call(frame):
-            # Delivered again in 50 ms, until the call has returned.
+        if _inside_a_dask_client_call(frame) or a_row_is_in_hand():
+            # Delivered again in 50 ms, until the call has returned or the row is out.
             threading.Timer(0.05, _thread.interrupt_main, args=(signum,)).start()
             return
         signal.signal(signal.SIGINT, signal.SIG_IGN)

@@ -4,9 +4,14 @@ however the run stops."""
 
 from __future__ import annotations
 
+import os
+import signal
+import time
+
 import pytest
 
 from gsrwt_cli.batch.in_order import run_in_order
+from gsrwt_cli.cli.batch_run import stop_on_signals
 
 
 def finishing(order: list[int], closed: list[bool]):
@@ -58,4 +63,36 @@ def test_a_stop_rows_every_index_once_and_stops_the_workers():
     assert [row["index"] for row in out] == [0, 1, 2, 3, 4, 5]
     assert [row["status"] for row in out] == ["ok"] * 3 + ["interrupted", "parent",
                                                             "interrupted"]
+    assert closed
+
+
+def slowly_finishing(count: int, closed: list[bool]):
+    """Results a tenth of a second apart, as a batch's workers send them."""
+    try:
+        for index in range(count):
+            time.sleep(0.1)
+            yield index, {"index": index, "status": "ok"}
+    finally:
+        closed.append(True)
+
+
+def test_ctrl_c_while_a_row_is_written_waits_for_the_row():
+    """A real SIGINT, sent while a row is half-written, through gsrwt's own handler: the row
+    is finished and kept, the stop lands while the next result is awaited, and every index
+    has one row. (Before, the KeyboardInterrupt landed inside ``on_row``, after the index had
+    counted out: the image had no row at all.)"""
+    out, closed = [], []
+
+    def on_row(row):
+        if row["index"] == 1:
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(0.01)  # the handler runs here, inside the writing of the row
+        out.append(row)
+
+    with pytest.raises(KeyboardInterrupt), stop_on_signals():
+        run_in_order(5, slowly_finishing(5, closed), on_row,
+                     lambda index: {"index": index, "status": "interrupted"})
+    assert [row["index"] for row in out] == [0, 1, 2, 3, 4]
+    assert [row["status"] for row in out] == ["ok", "ok", "interrupted", "interrupted",
+                                              "interrupted"]
     assert closed
