@@ -324,10 +324,11 @@ def test_chessboard_photos_with_no_camera_bend_and_are_refused_straightened_they
     not there, and before the lens was looked for 6 right and 4 left were accepted 3.4 to 32
     degrees off the board (confidence 0.58 to 0.85). Now the lines' lens
     (:func:`~gsrwt_cli.api.lens_lines.lens_doubt`) turns right03, right06 and right09 by
-    4.9 to 25 degrees, and left02, left05 and left09 tell no pose straightened: they are
-    refused for it (2026-12-03: 3 right and 1 left still accepted and off, right02, right08,
-    left08 and right11, whose straightened pose is within 3 degrees of the bent one, or whose
-    k1 the lines do not pin down). Undistorted by
+    4.9 to 25 degrees and right02 and left08 by 2.05 and 2.8 (more than the 2 degrees the
+    confidence is about), and left02, left05 and left09 tell no pose straightened: they are
+    refused for it (2026-12-03: right08 and right11 still accepted and off, whose
+    straightened pose is within 2 degrees of the bent one, or whose k1 the lines do not pin
+    down; with a bar of 3 degrees right02 and left08 were too). Undistorted by
     OpenCV with their calibration and still given no camera, the lines show no lens: none is
     refused for it, and most of those accepted are within 2 degrees (7 accepted, 5 within;
     right05 is 6.6 off, the principal point taken as the centre is 12 px off)."""
@@ -336,11 +337,10 @@ def test_chessboard_photos_with_no_camera_bend_and_are_refused_straightened_they
     bent = {p.image for p in taken + left
             if p.error.startswith("the straight edges bend (the lines show a lens: k1 ")}
     assert {"right03.jpg", "right06.jpg", "right09.jpg", "left02.jpg", "left05.jpg",
-            "left09.jpg"} <= bent
+            "left08.jpg", "left09.jpg"} <= bent
     assert all(p.error.endswith("give the camera's calibration (--camera)") for p in taken
                + left if p.image in bent)
-    assert sum(p.confidently_wrong for p in taken) <= 3
-    assert sum(p.confidently_wrong for p in left) <= 1
+    assert sum(p.confidently_wrong for p in taken + left) <= 3  # 2026-12-03: 2
     storage = cv2.FileStorage(str(DATA / "right_camera.yml"), cv2.FILE_STORAGE_READ)
     matrix = storage.getNode("camera_matrix").mat()
     distortion = storage.getNode("distortion_coefficients").mat()
@@ -362,10 +362,11 @@ def test_chessboard_photos_with_an_exif_focal_length_and_no_lens_are_checked_for
     (29 mm for 35 mm film, written with Pillow) and nothing of the lens. Refined by the
     segments but straight through the bent edges, 17 were accepted, 15 of them 3.0 to 22
     degrees off the board (confidence 0.57 to 0.87). An EXIF focal length says nothing of
-    the lens, so these are checked as photos with no camera are: the lines' k1 (-0.21 to
-    -0.28, against the calibrations' -0.30 and -0.27) turns 9 of them by more than 3 degrees
-    or leaves no pose, and they are refused for it (2026-12-03: 6 accepted, all off: left01
-    and left06 the room's frame, right12 and left14 at 3.0 and 3.2, right08 and left08)."""
+    the lens, so these are checked as photos with no camera are: the lines' k1 (-0.19 to
+    -0.37, against the calibrations' -0.30 and -0.27) turns 14 of them by more than 2 degrees
+    or leaves no pose, and they are refused for it (2026-12-03: 3 accepted, all off: left01
+    and left06 the room's frame, right12 at 3.0; with a bar of 3 degrees instead of 2, 6:
+    right08, left08 and left14 too)."""
     from PIL import Image
 
     for camera in ("right", "left"):
@@ -380,8 +381,8 @@ def test_chessboard_photos_with_an_exif_focal_length_and_no_lens_are_checked_for
     boards = [board for camera in ("right", "left") for board in
               bench_real_photos.evaluate_chessboards(tmp_path, calibrated=False, camera=camera)]
     bent = [board for board in boards if board.error.startswith("the straight edges bend")]
-    assert len(bent) >= 7
-    assert sum(board.confidently_wrong for board in boards) <= 7
+    assert len(bent) >= 12
+    assert sum(board.confidently_wrong for board in boards) <= 4
     (row,) = read_table(run_gsrwt("estimate", str(tmp_path / "right09.jpg"), "-f",
                                   "csv").stdout)
     assert row["focal_source"] == "exif+lines"  # the EXIF focal length was read
