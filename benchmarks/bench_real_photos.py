@@ -494,10 +494,11 @@ def survey_photos(folder: Path, factors: tuple[float, ...] = FOCAL_FACTORS,
     """Any folder of photos whose orientation nobody measured (``*.jpg``, ``*.jpeg``,
     ``*.png`` in it and below): each shrunk as ``tests/data/real`` is (area averaging) to a
     long side of at most ``long_side`` pixels, then estimated in this process with no focal
-    length (checked for a lens, as ``gsrwt estimate`` does with no camera) and with
-    ``factors`` times its long side: per photo, the runs that gave a pose (``none``, ``0.8``
-    ...) with its confidence and pan, tilt, roll. For photos that must be refused (no
-    man-made structure), every such run is a confidently wrong result to look at."""
+    length and with ``factors`` times its long side, given alone (each checked for a lens, as
+    ``gsrwt estimate`` checks a photo with no camera or a focal length alone): per photo,
+    the runs that gave a pose (``none``, ``0.8`` ...) with its confidence and pan, tilt,
+    roll. For photos that must be refused (no man-made structure), every such run is a
+    confidently wrong result to look at."""
     from gsrwt_cli.api.estimate import DEFAULT_MIN_CONFIDENCE, detect_segments, estimate_pose
     from gsrwt_cli.api.lens_lines import checked_for_a_lens
     from gsrwt_cli.geometry.camera import Intrinsics
@@ -520,9 +521,8 @@ def survey_photos(folder: Path, factors: tuple[float, ...] = FOCAL_FACTORS,
             focal = None if factor is None else factor * max(width, height)
             camera = None if focal is None else Intrinsics(
                 focal, focal, (width - 1) / 2, (height - 1) / 2, width=width, height=height)
-            estimate = estimate_pose(pixels, camera, lines=lines)
-            if camera is None:
-                estimate = checked_for_a_lens(pixels, estimate)
+            estimate = checked_for_a_lens(pixels, estimate_pose(pixels, camera, lines=lines),
+                                          camera=camera)
             if estimate.error is None and estimate.confidence >= DEFAULT_MIN_CONFIDENCE:
                 pose = estimate.pose
                 accepted.append(f"{'none' if factor is None else f'{factor:g}'}: "

@@ -395,8 +395,9 @@ def lens_doubt(image: np.ndarray, estimate: PoseEstimate,
                lines: np.ndarray | None = None, found: LinesLens | None = None,
                camera: Intrinsics | None = None) -> str | None:
     """Why a pose estimated with no camera at all (``estimate_pose(image, None)``, its focal
-    length estimated, no lens), or with a ``camera`` whose focal length is only EXIF's (its
-    lens unknown), cannot be trusted because the image's lines show a lens, or None.
+    length estimated, no lens), or with a ``camera`` whose focal length is only EXIF's or
+    was given alone (its lens unknown), cannot be trusted because the image's lines show a
+    lens, or None.
 
     An uncalibrated wide angle bends the edges away from the centre; the pinhole estimate
     then takes bent pieces for directions of their own and the focal length from vanishing
@@ -456,10 +457,11 @@ def checked_for_a_lens(image: np.ndarray, estimate: PoseEstimate,
                        min_confidence: float = DEFAULT_MIN_CONFIDENCE,
                        found: LinesLens | None = None,
                        camera: Intrinsics | None = None) -> PoseEstimate:
-    """``estimate``, made with no camera at all (or with ``camera``, an EXIF focal length
-    and no lens), as it stands, or refused with :func:`lens_doubt`'s reason (no pose,
-    confidence 0) when it would be taken (no error, confidence at least ``min_confidence``)
-    and the lines doubt it (``found``: their k1, when already searched)."""
+    """``estimate``, made with no camera at all (or with ``camera``, a focal length from
+    EXIF or given alone, and no lens), as it stands, or refused with :func:`lens_doubt`'s
+    reason (no pose, confidence 0) when it would be taken (no error, confidence at least
+    ``min_confidence``) and the lines doubt it (``found``: their k1, when already
+    searched)."""
     if not estimate.ok or estimate.confidence < min_confidence:
         return estimate
     doubt = lens_doubt(image, estimate, principal_point, estimate.lines, found, camera)

@@ -127,14 +127,21 @@ def orientation_of(path: Path, options: EstimateOptions) -> int:
     return 1 if options.orientation == "ignore" else file_orientation(path)
 
 
-def _lens_unknown(camera: Intrinsics | None, source: str) -> bool:
+def lens_unknown(camera: Intrinsics | None, source: str, values: Mapping[str, Any]) -> bool:
     """Whether an estimate is checked for a lens nobody calibrated
-    (:func:`~gsrwt_cli.api.lens_lines.checked_for_a_lens`): with no camera at all, or a focal
-    length from EXIF, square pixels and no lens (from a calibration file or lensfun). A focal
-    length given (``--focal``, a sidecar, a calibration file) is taken as the pinhole's it
-    says."""
-    return camera is None or (source == "exif" and camera.lens is None
-                              and camera.fx == camera.fy and camera.skew == 0)
+    (:func:`~gsrwt_cli.api.lens_lines.checked_for_a_lens`): with no camera at all, or with
+    square pixels and no lens (from a calibration file, a sidecar's coefficients or lensfun)
+    and a focal length from EXIF or given alone (``--focal``, a sidecar's ``focal``, with no
+    principal point in ``values``). A principal point comes from a calibration, which
+    measures the lens too: a camera given with one, or by a calibration file, is taken as
+    the pinhole it says. A focal length alone (a datasheet's, a field of view's) says
+    nothing of the lens, no more than EXIF's does."""
+    if camera is None:
+        return True
+    if camera.lens is not None or camera.fx != camera.fy or camera.skew != 0:
+        return False
+    return source == "exif" or (source in ("option", "sidecar") and all(
+        values.get(name) in (None, "") for name in ("cx", "cy")))
 
 
 def estimate_file(path: Path, values: Mapping[str, Any], where: str, options: EstimateOptions
@@ -163,7 +170,7 @@ def estimate_file(path: Path, values: Mapping[str, Any], where: str, options: Es
 
         estimate, found = estimate_with_lens_from_lines(
             image, camera, principal_point=principal_point, wall=options.wall)
-        if _lens_unknown(camera, source) and not found.taken:  # as without the option
+        if lens_unknown(camera, source, values) and not found.taken:  # as without it
             estimate = checked_for_a_lens(image, estimate, principal_point,
                                           options.min_confidence, found, camera)
         lens = {**lens, "lines": found}
@@ -177,7 +184,7 @@ def estimate_file(path: Path, values: Mapping[str, Any], where: str, options: Es
     spread = EXIF_FOCAL_SPREAD if source == "exif" and camera is not None else 0.0
     estimate = estimate_pose(image, camera, principal_point=principal_point, wall=options.wall,
                              focal_spread=spread)
-    if _lens_unknown(camera, source):  # an uncalibrated lens's bent edges mislead
+    if lens_unknown(camera, source, values):  # an uncalibrated lens's bent edges mislead
         from ..api.lens_lines import checked_for_a_lens
 
         estimate = checked_for_a_lens(image, estimate, principal_point, options.min_confidence,

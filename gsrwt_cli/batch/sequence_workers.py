@@ -130,7 +130,10 @@ class EstimateFrames:
             principal_point = (view.cx, view.cy)
         estimate = estimate_pose(frame.pixels, camera, principal_point=principal_point,
                                  wall=self.options.wall)
-        if camera is None:  # no camera at all: an uncalibrated lens's bent edges mislead
+        # no camera at all: an uncalibrated lens's bent edges mislead (a focal length given
+        # alone is not checked here, unlike a photo's: the check would take each frame four
+        # times as long as its estimate)
+        if camera is None:
             from ..api.lens_lines import checked_for_a_lens
 
             estimate = checked_for_a_lens(frame.pixels, estimate, principal_point,
