@@ -67,10 +67,13 @@ def test_a_stop_rows_every_index_once_and_stops_the_workers():
 
 
 def slowly_finishing(count: int, closed: list[bool]):
-    """Results a tenth of a second apart, as a batch's workers send them."""
+    """Results as a batch's workers send them: the first two a tenth of a second apart, the
+    rest a second apart, so that a stop delivered again 50 ms after the row in hand lands
+    while the third is awaited, however late a loaded machine runs the timer (the main
+    thread sees it when it next runs Python: here, when the wait ends)."""
     try:
         for index in range(count):
-            time.sleep(0.1)
+            time.sleep(0.1 if index < 2 else 1.0)
             yield index, {"index": index, "status": "ok"}
     finally:
         closed.append(True)
