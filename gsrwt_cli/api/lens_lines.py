@@ -67,7 +67,13 @@ from .estimate import (
 )
 
 #: The k1 searched first (normalised coordinates at the reference focal length): barrel
-#: lenses to -0.5, pincushion to 0.3.
+#: lenses to -0.5, pincushion to 0.3. In the lens check (:func:`lens_doubt`), at a focal
+#: length ``f`` longer than the image's long side ``L``, the grid and the search's span are
+#: ``(f / L)^2`` times these: k1 normalised at ``f`` bends the photo's pixels ``(L / f)^2``
+#: times as little, and a focal length estimated through a lens nobody told us of can be
+#: several times too long (OpenCV's right webcam, k1 -0.30 at 537 px: one photo's pinhole
+#: estimate 2097 px, where the unscaled grid's -0.5 is its lens's -0.03; it was accepted
+#: 32 degrees off).
 K1_GRID = tuple(round(-0.5 + 0.05 * k, 2) for k in range(17))
 #: The golden-section search around the grid's best: this far either way, these many steps.
 K1_SPAN = 0.06
@@ -251,12 +257,15 @@ class _Search:
         return cauchy, directions, own
 
 
-def lens_from_lines(image: np.ndarray, camera: Intrinsics, lines: np.ndarray | None = None
-                    ) -> LinesLens:
+def lens_from_lines(image: np.ndarray, camera: Intrinsics, lines: np.ndarray | None = None,
+                    *, wide: bool = False) -> LinesLens:
     """The plumb-line k1 of the camera that took ``image`` (module docstring), normalised at
     ``camera``'s focal lengths (its lens, if any, is ignored: this is for cameras without
-    one); ``lines``: segments ``(N, 4)`` instead of detecting them. Never raises for an image
-    that cannot tell: the result's ``reason`` says why."""
+    one); ``lines``: segments ``(N, 4)`` instead of detecting them; ``wide``: at a focal
+    length longer than the image's long side, search the k1 that bend its pixels as much as
+    :data:`K1_GRID` does at the long side (the lens check of a focal length that is itself
+    in doubt, :func:`lens_doubt`). Never raises for an image that cannot tell: the result's
+    ``reason`` says why."""
     height, width = np.asarray(image).shape[:2]
     detected = detect_segments(image) if lines is None else np.asarray(lines, dtype=np.float64)
     focal = camera.focal
@@ -267,23 +276,26 @@ def lens_from_lines(image: np.ndarray, camera: Intrinsics, lines: np.ndarray | N
     inlier_px = inlier_distance(width, height)
     pinhole = Intrinsics(camera.fx, camera.fy, camera.cx, camera.cy, 0.0, width, height)
     search = _Search(detected, pinhole, inlier_px)
-    scored = [search.grid_score(k1) for k1 in K1_GRID]
+    widen = max(1.0, (focal / max(width, height)) ** 2) if wide else 1.0
+    grid = [widen * k1 for k1 in K1_GRID]
+    scored = [search.grid_score(k1) for k1 in grid]
     best = int(np.argmax([score for score, _, _ in scored]))
     _, start, labels = scored[best]
     if (labels >= 0).sum() < MIN_LENS_SEGMENTS:
         return LinesLens(math.nan, math.inf, focal, int((labels >= 0).sum()),
                          reason=f"too few segments meet in the scene's directions: "
                                 f"{int((labels >= 0).sum())} (need {MIN_LENS_SEGMENTS})")
-    k1 = golden_minimum(lambda k: search.cost(k, start, labels)[0], K1_GRID[best] - K1_SPAN,
-                        K1_GRID[best] + K1_SPAN, K1_ITERATIONS)
+    span = widen * K1_SPAN
+    k1 = golden_minimum(lambda k: search.cost(k, start, labels)[0], grid[best] - span,
+                        grid[best] + span, K1_ITERATIONS)
     # the inliers again at the found k1, and the search polished once with them
     _, directions, _ = search.cost(k1, start, labels)
     ideal, scale = search.ideal(k1)
     distance = search.distances(ideal, scale, directions)
     nearest = distance.min(axis=1)
     labels = np.where(nearest < inlier_px, distance.argmin(axis=1), -1)
-    k1 = golden_minimum(lambda k: search.cost(k, directions, labels)[0], k1 - K1_SPAN / 3,
-                        k1 + K1_SPAN / 3, K1_ITERATIONS)
+    k1 = golden_minimum(lambda k: search.cost(k, directions, labels)[0], k1 - span / 3,
+                        k1 + span / 3, K1_ITERATIONS)
     sigma = _k1_sigma(search, k1, directions, labels)
     residual_after = float(np.median(search.cost(k1, directions, labels)[2]))
     residual_before = float(np.median(search.cost(0.0, directions, labels)[2]))
@@ -403,7 +415,8 @@ def lens_doubt(image: np.ndarray, estimate: PoseEstimate,
     then takes bent pieces for directions of their own and the focal length from vanishing
     points that are not there (OpenCV's chessboard photos, k1 -0.27 and -0.30: 10 of 26
     accepted more than 3 degrees off; the same photos undistorted are right). So k1 is
-    estimated from the lines at the estimate's focal length (:func:`lens_from_lines`) and,
+    estimated from the lines at the estimate's focal length (:func:`lens_from_lines`, its
+    grid ``wide`` when that focal length is longer than the long side) and,
     where it is :data:`MIN_SIGMAS` standard deviations or more from 0 (whether or not its
     gate would take it as a lens), the pose is estimated again from the straightened
     segments. The pinhole pose is doubted when that one turns its vertical or its wall's
@@ -414,7 +427,8 @@ def lens_doubt(image: np.ndarray, estimate: PoseEstimate,
     photographer's EXIF says nothing of the lens, and an action camera's or a webcam's bends
     (the chessboard photos given their focal length alone: 17 of 26 accepted 3.4 to 24
     degrees off; with the lines' lens, most within 2.6). ``found``: that k1, when already
-    searched (used if at the estimate's focal length)."""
+    searched (used if at the estimate's focal length, and that no longer than the long
+    side)."""
     if not estimate.ok or estimate.focal is None or estimate.world_from_camera is None:
         return None
     image = np.asarray(image)
@@ -424,9 +438,9 @@ def lens_doubt(image: np.ndarray, estimate: PoseEstimate,
     cx, cy = principal_point or ((width - 1) / 2.0, (height - 1) / 2.0)
     focal = estimate.focal
     detected = detect_segments(image) if lines is None else lines
-    if found is None or found.focal != focal:
+    if found is None or found.focal != focal or focal > max(width, height):
         found = lens_from_lines(image, Intrinsics(focal, focal, cx, cy, width=width,
-                                                  height=height), detected)
+                                                  height=height), detected, wide=True)
     if not (math.isfinite(found.k1) and abs(found.k1) >= MIN_SIGMAS * found.sigma):
         return None
     if camera is not None:

@@ -325,10 +325,13 @@ def test_chessboard_photos_with_no_camera_bend_and_are_refused_straightened_they
     degrees off the board (confidence 0.58 to 0.85). Now the lines' lens
     (:func:`~gsrwt_cli.api.lens_lines.lens_doubt`) turns right03, right06 and right09 by
     4.9 to 25 degrees and right02 and left08 by 2.05 and 2.8 (more than the 2 degrees the
-    confidence is about), and left02, left05 and left09 tell no pose straightened: they are
-    refused for it (2026-12-03: right08 and right11 still accepted and off, whose
-    straightened pose is within 2 degrees of the bent one, or whose k1 the lines do not pin
-    down; with a bar of 3 degrees right02 and left08 were too). Undistorted by
+    confidence is about), and left02, left05, left09 and right11 tell no pose straightened:
+    they are refused for it. right11's pinhole estimate is 2097 px (537 true) and near
+    frontal, 32 degrees off; k1 searched only to -0.5 at that focal length (-0.03 at its
+    lens's) was not pinned down (-0.58 +- 0.99), and it was accepted until the search
+    reached as far in pixels as at the long side (2026-12-04; k1 -2.6 +- 0.3 at 2097 px).
+    right08 is still accepted and off: its straightened pose is within 2 degrees of the
+    bent one (with a bar of 3 degrees right02 and left08 were too). Undistorted by
     OpenCV with their calibration and still given no camera, the lines show no lens: none is
     refused for it, and most of those accepted are within 2 degrees (7 accepted, 5 within;
     right05 is 6.6 off, the principal point taken as the centre is 12 px off)."""
@@ -336,11 +339,11 @@ def test_chessboard_photos_with_no_camera_bend_and_are_refused_straightened_they
     left = bench_real_photos.evaluate_chessboards(calibrated=False, camera="left")
     bent = {p.image for p in taken + left
             if p.error.startswith("the straight edges bend (the lines show a lens: k1 ")}
-    assert {"right03.jpg", "right06.jpg", "right09.jpg", "left02.jpg", "left05.jpg",
-            "left08.jpg", "left09.jpg"} <= bent
+    assert {"right03.jpg", "right06.jpg", "right09.jpg", "right11.jpg", "left02.jpg",
+            "left05.jpg", "left08.jpg", "left09.jpg"} <= bent
     assert all(p.error.endswith("give the camera's calibration (--camera)") for p in taken
                + left if p.image in bent)
-    assert sum(p.confidently_wrong for p in taken + left) <= 3  # 2026-12-03: 2
+    assert sum(p.confidently_wrong for p in taken + left) <= 1  # 2026-12-04: right08
     storage = cv2.FileStorage(str(DATA / "right_camera.yml"), cv2.FILE_STORAGE_READ)
     matrix = storage.getNode("camera_matrix").mat()
     distortion = storage.getNode("distortion_coefficients").mat()
