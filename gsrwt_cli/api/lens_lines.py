@@ -79,7 +79,8 @@ K1_GRID = tuple(round(-0.5 + 0.05 * k, 2) for k in range(17))
 K1_SPAN = 0.06
 K1_ITERATIONS = 16
 #: Without a focal length: k1 searched again at the focal length the straightened lines give,
-#: at most this many times (until it moves less than 0.2 %).
+#: at most this many times (until it moves less than 0.2 %), by ``--lens-from-lines`` and by
+#: the lens check (:func:`lens_doubt`).
 ROUNDS = 3
 #: The step of the cost's curvature (:func:`_k1_sigma`).
 K1_STEP = 0.01
@@ -428,12 +429,16 @@ def lens_doubt(image: np.ndarray, estimate: PoseEstimate,
     points that are not there (OpenCV's chessboard photos, k1 -0.27 and -0.30: 10 of 26
     accepted more than 3 degrees off; the same photos undistorted are right). So k1 is
     estimated from the lines at the estimate's focal length (:func:`lens_from_lines`, its
-    grid ``wide`` when that focal length is longer than the long side) and,
-    where it is :data:`MIN_SIGMAS` standard deviations or more from 0 (whether or not its
-    gate would take it as a lens), the pose is estimated again from the straightened
-    segments. The pinhole pose is doubted when that one turns its vertical or its wall's
-    normal by more than :data:`MAX_LENS_TURN_DEGREES` (each against the nearest of the
-    other frame's axes, as lines), or cannot be told (refused, or below
+    grid ``wide`` when that focal length is longer than the long side) and, where it is
+    :data:`MIN_SIGMAS` standard deviations or more from 0 (whether or not its gate would
+    take it as a lens), the pose is estimated again from the straightened segments; with no
+    camera, k1 is then searched again at the focal length they give, as long as it moves
+    and stays significant, at most :data:`ROUNDS` times (a lens makes the pinhole focal
+    length too long, and k1 searched there comes out short: a render through k1 -0.2 at
+    800 px, 949 px and k1 -0.17 at first, was accepted 3.1 degrees off; searched again,
+    -0.19 and refused). The pinhole pose is doubted when that one turns its vertical or its
+    wall's normal by more than :data:`MAX_LENS_TURN_DEGREES` (each against the nearest of
+    the other frame's axes, as lines), or cannot be told (refused, or below
     :data:`~gsrwt_cli.api.estimate.DEFAULT_MIN_CONFIDENCE`). With a ``camera`` the focal
     length stays the estimate's and the pose is estimated again with that lens: a
     photographer's EXIF says nothing of the lens, and an action camera's or a webcam's bends
@@ -460,10 +465,20 @@ def lens_doubt(image: np.ndarray, estimate: PoseEstimate,
             focal, focal, cx, cy, 0.0, width, height,
             Lens("plumb_bob", (("k1", found.k1),))), lines=detected)
     else:
-        ideal = undistort_k1(detected.reshape(-1, 2), (cx, cy), focal, focal,
-                             found.k1).reshape(-1, 4)
-        straightened = estimate_pose(image, None, principal_point=(cx, cy),
-                                     lines=ideal[np.all(np.isfinite(ideal), axis=1)])
+        for _ in range(ROUNDS):  # k1 again at the focal length the straightened lines give
+            ideal = undistort_k1(detected.reshape(-1, 2), (cx, cy), focal, focal,
+                                 found.k1).reshape(-1, 4)
+            straightened = estimate_pose(image, None, principal_point=(cx, cy),
+                                         lines=ideal[np.all(np.isfinite(ideal), axis=1)])
+            if (straightened.focal is None or straightened.confidence < DEFAULT_MIN_CONFIDENCE
+                    or abs(math.log(straightened.focal / focal)) < 0.002):
+                break
+            again = lens_from_lines(image, Intrinsics(
+                straightened.focal, straightened.focal, cx, cy, width=width, height=height),
+                detected, wide=True)
+            if not (math.isfinite(again.k1) and abs(again.k1) >= MIN_SIGMAS * again.sigma):
+                break
+            focal, found = straightened.focal, again
     bends = (f"the straight edges bend (the lines show a lens: k1 {found.k1:+.3f} +- "
              f"{found.sigma:.3f})")
     if not straightened.ok or straightened.confidence < DEFAULT_MIN_CONFIDENCE:
