@@ -436,7 +436,7 @@ def lens_doubt(image: np.ndarray, estimate: PoseEstimate,
     and stays significant, at most :data:`ROUNDS` times (a lens makes the pinhole focal
     length too long, and k1 searched there comes out short: a render through k1 -0.2 at
     800 px, 949 px and k1 -0.17 at first, was accepted 3.1 degrees off; searched again,
-    -0.19 and refused). The pinhole pose is doubted when that one turns its vertical or its
+    -0.185 and refused). The pinhole pose is doubted when that one turns its vertical or its
     wall's normal by more than :data:`MAX_LENS_TURN_DEGREES` (each against the nearest of
     the other frame's axes, as lines), or cannot be told (refused, or below
     :data:`~gsrwt_cli.api.estimate.DEFAULT_MIN_CONFIDENCE`). With a ``camera`` the focal
@@ -465,14 +465,15 @@ def lens_doubt(image: np.ndarray, estimate: PoseEstimate,
             focal, focal, cx, cy, 0.0, width, height,
             Lens("plumb_bob", (("k1", found.k1),))), lines=detected)
     else:
-        for _ in range(ROUNDS):  # k1 again at the focal length the straightened lines give
+        for round_ in range(ROUNDS):  # k1 again at the focal length the lines then give
             ideal = undistort_k1(detected.reshape(-1, 2), (cx, cy), focal, focal,
                                  found.k1).reshape(-1, 4)
             straightened = estimate_pose(image, None, principal_point=(cx, cy),
                                          lines=ideal[np.all(np.isfinite(ideal), axis=1)])
-            if (straightened.focal is None or straightened.confidence < DEFAULT_MIN_CONFIDENCE
+            if (round_ == ROUNDS - 1 or straightened.focal is None
+                    or straightened.confidence < DEFAULT_MIN_CONFIDENCE
                     or abs(math.log(straightened.focal / focal)) < 0.002):
-                break
+                break  # the message names the k1 this pose was straightened with
             again = lens_from_lines(image, Intrinsics(
                 straightened.focal, straightened.focal, cx, cy, width=width, height=height),
                 detected, wide=True)

@@ -102,7 +102,7 @@ def test_the_lens_check_searches_k1_again_where_the_straightened_lines_put_the_f
     """A render through k1 -0.2 at 800 px (OpenCV's lens model), given no camera: the bent
     edges make the pinhole estimate 949 px, 3.1 degrees off, and k1 searched at 949 px
     comes out short (-0.17), its straightened pose turning under 2 degrees: it was written
-    ``ok``. Searched again at the focal length the straightened lines give, k1 is the lens's
+    ``ok``. Searched again at the focal length the straightened lines give, k1 is near the lens's
     and the pose turns by more than 2 degrees: refused, the lens named."""
     shot = render_distorted_room(30, 5, 2, k1=-0.2, focal=800, seed=1)
     pinhole = estimate_pose(shot.image, None)
