@@ -79,9 +79,10 @@ K1_GRID = tuple(round(-0.5 + 0.05 * k, 2) for k in range(17))
 K1_SPAN = 0.06
 K1_ITERATIONS = 16
 #: Without a focal length: k1 searched again at the focal length the straightened lines give,
-#: at most this many times (until it moves less than 0.2 %), by ``--lens-from-lines`` and by
-#: the lens check (:func:`lens_doubt`).
+#: at most this many times (until it moves less than :data:`SETTLED_LOG_FOCAL`, 0.2 %), by
+#: ``--lens-from-lines`` and by the lens check (:func:`lens_doubt`).
 ROUNDS = 3
+SETTLED_LOG_FOCAL = 0.002
 #: The step of the cost's curvature (:func:`_k1_sigma`).
 K1_STEP = 0.01
 #: The gate (module docstring). k1's standard deviation at most this (the estimate is then
@@ -366,6 +367,18 @@ def _k1_sigma(search: _Search, k1: float, directions: np.ndarray, labels: np.nda
     return FOCAL_SIGMA_SCALE / math.sqrt(cauchy_curvature)
 
 
+def _straightened_pose(image: np.ndarray, detected: np.ndarray, centre: tuple[float, float],
+                       focal: float, k1: float, wall: str = "frontal") -> PoseEstimate:
+    """The pose with no focal length known (:func:`~gsrwt_cli.api.estimate.estimate_pose`)
+    from the ``detected`` segments' end points undistorted by ``k1`` about ``centre`` at
+    ``focal`` (those beyond the lens's fold left out); its ``lines`` are the kept segments
+    as detected."""
+    ideal = undistort_k1(detected.reshape(-1, 2), centre, focal, focal, k1).reshape(-1, 4)
+    keep = np.all(np.isfinite(ideal), axis=1)
+    estimate = estimate_pose(image, None, principal_point=centre, lines=ideal[keep], wall=wall)
+    return replace(estimate, lines=detected[keep])
+
+
 def estimate_with_lens_from_lines(
     image: np.ndarray, camera: Intrinsics | None = None, *,
     principal_point: tuple[float, float] | None = None, wall: str = "frontal",
@@ -397,15 +410,11 @@ def estimate_with_lens_from_lines(
         return estimate_pose(image, with_lens, lines=detected, wall=wall), found
     estimate = pinhole
     for _ in range(ROUNDS):  # k1 at the focal length the straightened lines give, again
-        ideal = undistort_k1(detected.reshape(-1, 2), (reference.cx, reference.cy),
-                             reference.fx, reference.fy, found.k1).reshape(-1, 4)
-        keep = np.all(np.isfinite(ideal), axis=1)
-        estimate = estimate_pose(image, None, principal_point=(reference.cx, reference.cy),
-                                 lines=ideal[keep], wall=wall)
-        estimate = replace(estimate, lines=detected[keep])
+        estimate = _straightened_pose(image, detected, (reference.cx, reference.cy),
+                                      reference.focal, found.k1, wall)
         if estimate.focal is None:  # no focal length with the lens: k1 means nothing alone
             return pinhole, replace(found, reason=f"no pose with the lens: {estimate.error}")
-        if abs(math.log(estimate.focal / reference.focal)) < 0.002:
+        if abs(math.log(estimate.focal / reference.focal)) < SETTLED_LOG_FOCAL:
             break
         reference = Intrinsics(estimate.focal, estimate.focal, reference.cx, reference.cy,
                                width=width, height=height)
@@ -466,13 +475,10 @@ def lens_doubt(image: np.ndarray, estimate: PoseEstimate,
             Lens("plumb_bob", (("k1", found.k1),))), lines=detected)
     else:
         for round_ in range(ROUNDS):  # k1 again at the focal length the lines then give
-            ideal = undistort_k1(detected.reshape(-1, 2), (cx, cy), focal, focal,
-                                 found.k1).reshape(-1, 4)
-            straightened = estimate_pose(image, None, principal_point=(cx, cy),
-                                         lines=ideal[np.all(np.isfinite(ideal), axis=1)])
+            straightened = _straightened_pose(image, detected, (cx, cy), focal, found.k1)
             if (round_ == ROUNDS - 1 or straightened.focal is None
                     or straightened.confidence < DEFAULT_MIN_CONFIDENCE
-                    or abs(math.log(straightened.focal / focal)) < 0.002):
+                    or abs(math.log(straightened.focal / focal)) < SETTLED_LOG_FOCAL):
                 break  # the message names the k1 this pose was straightened with
             again = lens_from_lines(image, Intrinsics(
                 straightened.focal, straightened.focal, cx, cy, width=width, height=height),
