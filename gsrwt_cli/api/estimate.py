@@ -55,6 +55,7 @@ from dataclasses import dataclass, field, replace
 import cv2
 import numpy as np
 
+from ..base.messages import shown_above, shown_below
 from ..geometry.camera import Intrinsics, Pose
 from ..geometry.rotations import PoseError, cross_matrix, cross_rows, pose_from_rotation
 from ..vision.edges import grey8
@@ -1352,7 +1353,7 @@ def _refusal(structure: float, uncertainty: FocalUncertainty | None,
     direction needs to be found (:data:`MIN_DIRECTION_SEGMENTS`)."""
     if structure < MIN_STRUCTURE_RATIO:
         return (f"no clear man-made structure: the straight segments fit three orthogonal "
-                f"directions only {structure:.1f} times as well as random ones do "
+                f"directions only {shown_below(structure)} times as well as random ones do "
                 f"(need {MIN_STRUCTURE_RATIO:g})")
     if vertical_segments is not None and vertical_segments[0] < vertical_segments[1]:
         count = vertical_segments[0]
@@ -1363,7 +1364,7 @@ def _refusal(structure: float, uncertainty: FocalUncertainty | None,
                 "(--verticals)")
     if vertical < MIN_VERTICAL_RATIO:
         return (f"no vertical structure: the segments along the vertical found fit it only "
-                f"{vertical:.1f} times as well as a random direction (need "
+                f"{shown_below(vertical)} times as well as a random direction (need "
                 f"{MIN_VERTICAL_RATIO:g}); give the pose, or guides (--verticals)")
     if uncertainty is not None and not uncertainty.degrees <= MAX_FOCAL_DEGREES:
         if math.isinf(uncertainty.degrees):
@@ -1371,12 +1372,12 @@ def _refusal(structure: float, uncertainty: FocalUncertainty | None,
                     "it down; give the focal length")
         return (f"focal length not determinable from this view: +-"
                 f"{100 * math.expm1(uncertainty.sigma):.0f} % turns the pose by "
-                f"{uncertainty.degrees:.1f} deg; give the focal length")
+                f"{shown_above(uncertainty.degrees)} deg; give the focal length")
     if uncertainty is not None and uncertainty.other_degrees > MAX_FOCAL_DEGREES:
         low, high = uncertainty.other_focals or (math.nan, math.nan)
         return (f"focal length not determinable from this view: {low:.0f} to {high:.0f} px "
                 f"fit the lines about as well and turn the pose by "
-                f"{uncertainty.other_degrees:.1f} deg; give the focal length")
+                f"{shown_above(uncertainty.other_degrees)} deg; give the focal length")
     return None
 
 

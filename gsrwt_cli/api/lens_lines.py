@@ -47,6 +47,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ..base.messages import shown_above
 from ..geometry.camera import Intrinsics
 from ..geometry.lens import Lens
 from .estimate import (
@@ -324,8 +325,8 @@ def _gate(found: LinesLens) -> str | None:
     if not math.isfinite(found.shift_px):
         return f"k1 {found.k1:+.3f} folds back within the image"
     if not found.sigma <= MAX_K1_SIGMA:
-        return (f"the lines do not pin k1 down: +-{found.sigma:.3f} (at most "
-                f"{MAX_K1_SIGMA:g} taken)")
+        return (f"the lines do not pin k1 down: +-{shown_above(found.sigma, 3)} (at "
+                f"most {MAX_K1_SIGMA:g} taken)")
     if abs(found.k1) < MIN_SIGMAS * found.sigma:
         return (f"no significant distortion: k1 {found.k1:+.4f} is within "
                 f"{MIN_SIGMAS:g} standard deviations ({found.sigma:.4f}) of 0")
@@ -495,8 +496,8 @@ def lens_doubt(image: np.ndarray, estimate: PoseEstimate,
     cosines = np.abs(estimate.world_from_camera[[0, 2]] @ straightened.world_from_camera.T)
     turn = math.degrees(math.acos(min(1.0, float(cosines.max(axis=1).min()))))
     if turn > MAX_LENS_TURN_DEGREES:
-        return (f"{bends} and straightened they turn the pose by {turn:.3g} deg; give the "
-                "camera's calibration (--camera)")
+        return (f"{bends} and straightened they turn the pose by {shown_above(turn, 2)} deg; "
+                "give the camera's calibration (--camera)")
     return None
 
 

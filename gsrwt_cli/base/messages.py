@@ -1,4 +1,5 @@
-"""How user data appears in messages: on one line, escaped, and never longer than a bound.
+"""How user data appears in messages: on one line, escaped, and never longer than a bound;
+and how a measured number appears beside the bar it missed.
 
 An error message quotes what it complains about, but a value from a file may be huge (a YAML
 alias bomb, a 400-digit number) or carry control characters (a file name with a newline).
@@ -7,8 +8,10 @@ alias bomb, a 400-digit number) or carry control characters (a file name with a 
 
 from __future__ import annotations
 
+import math
 import re
 import reprlib
+from decimal import ROUND_CEILING, ROUND_FLOOR, Decimal
 from typing import Any
 
 #: Characters of a value quoted in a message, at most.
@@ -64,3 +67,22 @@ def _bounded_repr(value: Any, limit: int) -> str:
 def one_line(text: str, limit: int = LINE_LIMIT) -> str:
     """A message on one line: control characters escaped, at most ``limit`` characters."""
     return shorten(escape_controls(str(text)), limit)
+
+
+def _rounded(value: float, digits: int, rounding: str) -> str:
+    if not math.isfinite(value):
+        return f"{value:.{digits}f}"
+    step = Decimal(1).scaleb(-digits)
+    return str(Decimal(repr(float(value))).quantize(step, rounding=rounding))
+
+
+def shown_below(value: float, digits: int = 1) -> str:
+    """``value`` rounded down to ``digits`` decimals: a measure under a bar never reads as the
+    bar itself (4.47 against a bar of 4.5 reads 4.4, not 4.5)."""
+    return _rounded(value, digits, ROUND_FLOOR)
+
+
+def shown_above(value: float, digits: int = 1) -> str:
+    """``value`` rounded up to ``digits`` decimals: a measure over a bar never reads as the
+    bar itself (3.04 against a bar of 3 reads 3.1, not 3.0)."""
+    return _rounded(value, digits, ROUND_CEILING)

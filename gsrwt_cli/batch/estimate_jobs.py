@@ -27,6 +27,7 @@ from ..api.estimate import (
     PoseEstimate,
     estimate_pose,
 )
+from ..base.messages import shown_below
 from ..geometry.camera import Intrinsics
 from ..geometry.guides import GuideError
 from ..geometry.orientation import displayed_size
@@ -230,8 +231,8 @@ def checked(estimate: PoseEstimate, options: EstimateOptions) -> None:
         if estimate.upright < UPRIGHT_NOTED:
             why += (f"; another of its directions is nearly as upright: the vertical taken "
                     f"is up with probability {estimate.upright:.2f}")
-        raise EstimateError(f"confidence {estimate.confidence:.2f} is below the minimum "
-                            f"{options.min_confidence:g} ({why})")
+        raise EstimateError(f"confidence {shown_below(estimate.confidence, 2)} is below the "
+                            f"minimum {options.min_confidence:g} ({why})")
 
 
 def estimated_values(estimate: PoseEstimate, camera: Intrinsics | None, width: int,

@@ -1,0 +1,1 @@
+"""Tests of ``gsrwt_cli/base/``: how values appear in messages."""
