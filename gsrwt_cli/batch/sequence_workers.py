@@ -115,7 +115,7 @@ class EstimateFrames:
     def __call__(self, frame: SequenceFrame) -> list[Row]:
         from ..api.estimate import EstimateError, estimate_pose
         from ..inputs.records import view_from_values
-        from .estimate_jobs import checked, estimate_row, estimated_values
+        from .estimate_jobs import checked, estimate_row, estimated_values, lens_unknown
 
         assert frame.pixels is not None
         height, width = frame.pixels.shape[:2]
@@ -130,14 +130,13 @@ class EstimateFrames:
             principal_point = (view.cx, view.cy)
         estimate = estimate_pose(frame.pixels, camera, principal_point=principal_point,
                                  wall=self.options.wall)
-        # no camera at all: an uncalibrated lens's bent edges mislead (a focal length given
-        # alone is not checked here, unlike a photo's: the check would take each frame four
-        # times as long as its estimate)
-        if camera is None:
+        # an uncalibrated lens's bent edges mislead: a frame is checked as a photo is (no
+        # camera, or a focal length given alone), whatever the check costs
+        if lens_unknown(camera, source, self.own):
             from ..api.lens_lines import checked_for_a_lens
 
             estimate = checked_for_a_lens(frame.pixels, estimate, principal_point,
-                                          self.options.min_confidence)
+                                          self.options.min_confidence, camera=camera)
         row = estimate_row(estimate, source)
         try:
             checked(estimate, self.options)
