@@ -31,3 +31,4 @@ def test_a_structure_ratio_a_hair_under_the_bar_reads_under_it() -> None:
     frames and was refused "only 4.5 times ... (need 4.5)"."""
     reason = _refusal(MIN_STRUCTURE_RATIO - 0.03, None)
     assert reason is not None and "only 4.4 times as well" in reason
+    assert reason.endswith("(need 4.5); give the pose, or guides (--verticals)")
