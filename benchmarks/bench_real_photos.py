@@ -28,11 +28,13 @@ Last, OpenCV's chessboard photos of its two webcams (``tests/data/right*.jpg``,
 and measured against its pose (:func:`evaluate_chessboards`).
 
     python benchmarks/bench_real_photos.py [PATH-TO-york-urban-train] [--json] [--jobs N]
-        [--two-directions]
+        [--two-directions] [--smaller] [--telephoto]
     python benchmarks/bench_real_photos.py --survey FOLDER [--long-side 640]
 
 ``--two-directions`` adds the York photos seen with one horizontal direction's edges left out
 (:func:`evaluate_two_directions`): views of a wall about frontally, and of a corridor.
+``--smaller`` adds them shrunk (:func:`evaluate_smaller`), ``--telephoto`` cropped around the
+principal point as a longer lens would have seen them (:func:`evaluate_telephoto`).
 ``--survey FOLDER`` only estimates every photo of a folder nobody measured
 (:func:`survey_photos`), to look for photos that get a pose they should not.
 
@@ -56,12 +58,16 @@ import time
 from collections.abc import Iterator
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import cv2
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import real_photos as measure  # noqa: E402
+
+if TYPE_CHECKING:
+    from gsrwt_cli.geometry.camera import Intrinsics
 
 REPOSITORY = Path(__file__).resolve().parent.parent
 DEFAULT_DATA = REPOSITORY.parent / "shared" / "data" / "york-urban-train"
@@ -266,6 +272,9 @@ def estimate_cpu_ms(data: Path, passes: int = IN_PROCESS_PASSES) -> float:
 LEFT_OUT_PX = 3.0
 #: The factors :func:`evaluate_smaller` shrinks the York photos by (480x360 and 320x240).
 SMALLER_FACTORS = (0.75, 0.5)
+#: The share of each side :func:`evaluate_telephoto` keeps of a York photo, around its
+#: principal point: 1.5, 2.1, 2.6 and 3.2 times the long side as the focal length.
+TELEPHOTO_FRACTIONS = (0.7, 0.5, 0.4, 1 / 3)
 
 
 def estimates_without(data: Path, dropped: str) -> Iterator[tuple[str, object,
@@ -364,10 +373,74 @@ def evaluate_smaller(data: Path, factors: tuple[float, ...] = SMALLER_FACTORS
     return runs
 
 
-def report_smaller(runs: list[RunResult]) -> str:
-    """The lines of :func:`evaluate_smaller`, as text."""
-    lines = ["York photos shrunk (in process, calibrated focal scaled with them): vertical "
-             "median / p90 / worst | wall normal | refused | confidently wrong"]
+def telephoto_view(pixels: np.ndarray, camera: Intrinsics, fraction: float,
+                   enlarge: bool = False) -> tuple[np.ndarray, Intrinsics]:
+    """The part of ``pixels`` (seen through the pinhole ``camera``) ``fraction`` of each side
+    wide and high around the principal point (moved inside the image where it must be): what
+    a lens of ``1 / fraction`` times the focal length would have seen, with the camera that
+    sees it (the principal point shifted; the orientation unchanged). ``enlarge``: resized
+    back to the photo's size (bicubic), the focal length and principal point scaled with it,
+    as a telephoto photo of as many pixels."""
+    from gsrwt_cli.geometry.camera import Intrinsics
+
+    height, width = pixels.shape[:2]
+    size = (round(width * fraction), round(height * fraction))
+    left = min(max(round(camera.cx - size[0] / 2), 0), width - size[0])
+    top = min(max(round(camera.cy - size[1] / 2), 0), height - size[1])
+    view = np.ascontiguousarray(pixels[top:top + size[1], left:left + size[0]])
+    cx, cy, focal = camera.cx - left, camera.cy - top, camera.focal
+    if enlarge:
+        scale = width / size[0]
+        view = cv2.resize(view, (width, height), interpolation=cv2.INTER_CUBIC)
+        cx, cy, focal = (cx + 0.5) * scale - 0.5, (cy + 0.5) * scale - 0.5, focal * scale
+    view_height, view_width = view.shape[:2]
+    return view, Intrinsics(focal, focal, cx, cy, width=view_width, height=view_height)
+
+
+def evaluate_telephoto(data: Path, fractions: tuple[float, ...] = TELEPHOTO_FRACTIONS
+                       ) -> list[RunResult]:
+    """The York photos as a longer lens would have seen them (:func:`telephoto_view`: each
+    cropped around its principal point to ``fractions`` of its sides, as cropped and enlarged
+    back to 640x480), estimated in this process with the focal length given and measured
+    against the same truth: real scenes at 1.5 to 3.2 long sides of focal length, which the
+    photos as taken (1.05) do not show."""
+    from gsrwt_cli.api.estimate import DEFAULT_MIN_CONFIDENCE, estimate_pose
+    from gsrwt_cli.geometry.camera import Intrinsics
+
+    cv2.setNumThreads(1)
+    runs = []
+    for fraction in fractions:
+        for enlarge in (False, True):
+            photos = []
+            for image, row in sorted(read_truth(data).items()):
+                pixels = cv2.imread(str(data / "images" / image))
+                height, width = pixels.shape[:2]
+                focal, cx, cy = (float(row[key]) for key in ("focal_px", "cx", "cy"))
+                view, camera = telephoto_view(
+                    pixels, Intrinsics(focal, focal, cx, cy, width=width, height=height),
+                    fraction, enlarge)
+                estimate = estimate_pose(view, camera)
+                ok = estimate.error is None and estimate.confidence >= DEFAULT_MIN_CONFIDENCE
+                errors = measure.image_errors(
+                    measure.directions_from_pose(estimate.pose.pan, estimate.pose.tilt,
+                                                 estimate.pose.roll) if ok else None,
+                    true_directions(row))
+                photos.append(PhotoResult(image, "ok" if ok else "error",
+                                          estimate.confidence, camera.focal, "sidecar",
+                                          camera.focal, errors.vertical, errors.wall,
+                                          estimate.error or ""))
+            long_sides = camera.focal / max(camera.width or 1, camera.height or 1)
+            name = (f"{round(width * fraction)}x{round(height * fraction)}"
+                    f"{' enlarged' if enlarge else ''} (f {long_sides:.1f} long sides)")
+            runs.append(RunResult(name, photos, 0.0, 0.0))
+    return runs
+
+
+def report_smaller(runs: list[RunResult], title: str = "York photos shrunk (in process, "
+                   "calibrated focal scaled with them)") -> str:
+    """The lines of :func:`evaluate_smaller` (or :func:`evaluate_telephoto`), as text."""
+    lines = [f"{title}: vertical median / p90 / worst | wall normal | refused | confidently "
+             "wrong"]
     for run in runs:
         vertical = measure.summarize(p.vertical for p in run.photos)
         wall = measure.summarize(p.wall for p in run.photos)
@@ -758,6 +831,9 @@ def main() -> None:
                              "out (about a minute more)")
     parser.add_argument("--smaller", action="store_true",
                         help="also the York photos shrunk to 480x360 and 320x240")
+    parser.add_argument("--telephoto", action="store_true",
+                        help="also the York photos cropped around their principal point, as "
+                             "a longer lens would have seen them")
     arguments = parser.parse_args()
     if arguments.survey is not None:
         surveyed = survey_photos(arguments.survey, long_side=arguments.long_side)
@@ -806,6 +882,10 @@ def main() -> None:
     if arguments.smaller and not arguments.json:
         print()
         print(report_smaller(evaluate_smaller(data)))
+    if arguments.telephoto and not arguments.json:
+        print()
+        print(report_smaller(evaluate_telephoto(data), "York photos as a longer lens would "
+                             "have seen them (in process, calibrated focal)"))
 
 
 if __name__ == "__main__":
