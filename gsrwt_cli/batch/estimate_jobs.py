@@ -226,8 +226,8 @@ def checked(estimate: PoseEstimate, options: EstimateOptions) -> None:
         why += (f"; the vertical's and the wall's own lines point up to "
                 f"{estimate.misfit:.1f} deg from the fitted frame")
         if not estimate.normal_seen:
-            why += ("; no edge recedes from the camera: the wall's direction rests on its "
-                    "horizontals alone")
+            why += ("; no edges recede from the camera, or no more than chance would make "
+                    "meet: the wall's direction rests on its horizontals alone")
         if estimate.upright < UPRIGHT_NOTED:
             why += (f"; another of its directions is nearly as upright: the vertical taken "
                     f"is up with probability {estimate.upright:.2f}")

@@ -67,7 +67,8 @@ def test_a_wrong_focal_length_shows_in_the_misfit_and_lowers_the_confidence(seed
     assert wrong.confidence < DEFAULT_MIN_CONFIDENCE
     features = confidence_features(wrong)
     assert features[2] == wrong.misfit
-    assert confidence_of(*features, wrong.upright) == pytest.approx(wrong.confidence)
+    assert confidence_of(*features, wrong.upright, wrong.normal_seen) == pytest.approx(
+        wrong.confidence)
 
 
 def test_the_confidence_is_the_rotations_whichever_wall_is_reported():

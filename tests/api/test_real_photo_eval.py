@@ -305,13 +305,14 @@ def test_the_other_webcams_chessboard_photos_are_right_or_the_rooms():
     0.21 to 0.63). left01 and left06 are 10.5 and 10.4 degrees off it (confidence 0.85 and
     0.69): their frame is the room's (the monitor's and the cabinet's verticals, the
     keyboard's and the desk's receding edges), and the board is held 10 and 24 degrees from
-    the room's axes: which plane a photo's pose is of, its lines cannot tell. Floors at
-    today's figures."""
+    the room's axes: which plane a photo's pose is of, its lines cannot tell. 2026-12-04:
+    left14 (within 2) refused at 0.49, its normal's segments meeting no more than chance
+    would (``false_alarms``): 8 and 6. Floors at today's figures."""
     boards = bench_real_photos.evaluate_chessboards(camera="left")
     assert len(boards) == 13
     ok = [p for p in boards if p.status == "ok"]
     within = [p for p in ok if measure.is_within(measure.ImageErrors(p.vertical, p.wall))]
-    assert len(within) >= 7
+    assert len(within) >= 6
     assert {p.image for p in boards if p.confidently_wrong} <= {"left01.jpg", "left06.jpg"}
     assert all(p.error for p in boards if p.status != "ok")
 
@@ -331,16 +332,21 @@ def test_chessboard_photos_with_no_camera_bend_and_are_refused_straightened_they
     lens's) was not pinned down (-0.58 +- 0.99), and it was accepted until the search
     reached as far in pixels as at the long side (2026-12-04; k1 -2.6 +- 0.3 at 2097 px).
     right08 is still accepted and off: its straightened pose is within 2 degrees of the
-    bent one (with a bar of 3 degrees right02 and left08 were too). Undistorted by
+    bent one (with a bar of 3 degrees right02 and left08 were too). Since a normal found only
+    by chance counts as unseen (``false_alarms``; a board's edges recede nowhere), right09,
+    right11, left05 and left09 are refused for their confidence (0.16 to 0.38) before the
+    lens is looked for. Undistorted by
     OpenCV with their calibration and still given no camera, the lines show no lens: none is
     refused for it, and most of those accepted are within 2 degrees (7 accepted, 5 within;
-    right05 is 6.6 off, the principal point taken as the centre is 12 px off)."""
+    right05 is 6.6 off, the principal point taken as the centre is 12 px off; 2026-12-04,
+    normals found only by chance counting as unseen: 4 accepted, all within 2 degrees)."""
     taken = bench_real_photos.evaluate_chessboards(calibrated=False)
     left = bench_real_photos.evaluate_chessboards(calibrated=False, camera="left")
     bent = {p.image for p in taken + left
             if p.error.startswith("the straight edges bend (the lines show a lens: k1 ")}
-    assert {"right03.jpg", "right06.jpg", "right09.jpg", "right11.jpg", "left02.jpg",
-            "left05.jpg", "left08.jpg", "left09.jpg"} <= bent
+    assert {"right03.jpg", "right06.jpg", "left02.jpg", "left08.jpg"} <= bent
+    unsure = {p.image for p in taken + left if p.error.startswith("confidence ")}
+    assert {"right09.jpg", "right11.jpg", "left05.jpg", "left09.jpg"} <= bent | unsure
     assert all(p.error.endswith("give the camera's calibration (--camera)") for p in taken
                + left if p.image in bent)
     assert sum(p.confidently_wrong for p in taken + left) <= 1  # 2026-12-04: right08
@@ -356,7 +362,7 @@ def test_chessboard_photos_with_no_camera_bend_and_are_refused_straightened_they
     assert not any(p.error.startswith("the straight edges bend") for p in straightened)
     ok = [p for p in straightened if p.status == "ok"]
     within = [p for p in ok if measure.is_within(measure.ImageErrors(p.vertical, p.wall))]
-    assert len(ok) >= 5 and len(within) > len(ok) / 2
+    assert len(ok) >= 4 and len(within) > len(ok) / 2
 
 
 def test_chessboard_photos_with_an_exif_focal_length_and_no_lens_are_checked_for_one(
@@ -384,7 +390,7 @@ def test_chessboard_photos_with_an_exif_focal_length_and_no_lens_are_checked_for
     boards = [board for camera in ("right", "left") for board in
               bench_real_photos.evaluate_chessboards(tmp_path, calibrated=False, camera=camera)]
     bent = [board for board in boards if board.error.startswith("the straight edges bend")]
-    assert len(bent) >= 12
+    assert len(bent) >= 10  # 12 until a normal found by chance counted as unseen (2026-12-04)
     assert sum(board.confidently_wrong for board in boards) <= 4
     (row,) = read_table(run_gsrwt("estimate", str(tmp_path / "right09.jpg"), "-f",
                                   "csv").stdout)
@@ -538,12 +544,13 @@ def test_york_photos_seen_through_a_longer_lens_are_no_worse_than_today():
     """The York photos cropped around their principal point to 0.7, 1/2, 0.4 and 1/3 of their
     sides (1.5 to 3.2 long sides of focal length), as cropped and enlarged back to 640x480.
     2026-12-04: the estimator is much less sure of them, and not yet honest there. Confidently
-    wrong per run: 1, 4, 3, 2, 4, 3, 1, 8 (the enlarged crops at 3.2 long sides: 29 accepted,
-    8 of them more than 3 degrees off, nearly all in the wall's normal: its horizontals
-    converge too little at that focal length, and short pieces of clutter meeting near the
-    middle pass for the edges receding from the camera). A ceiling, not a goal: fewer is
-    better."""
-    ceilings = (1, 4, 3, 2, 4, 3, 1, 8)
+    wrong per run: 1, 4, 3, 2, 4, 3, 1, 8 at first (the enlarged crops at 3.2 long sides: 29
+    accepted, 8 of them more than 3 degrees off, nearly all in the wall's normal: its
+    horizontals converge too little at that focal length, and short pieces of clutter meeting
+    near the middle passed for the edges receding from the camera); 1, 4, 2, 2, 0, 3, 0, 5
+    once a normal found only by chance is taken as unseen (``false_alarms``). A ceiling, not a
+    goal: fewer is better."""
+    ceilings = (1, 4, 2, 2, 0, 3, 0, 5)
     runs = bench_real_photos.evaluate_telephoto(YORK)
     assert [len(run.confidently_wrong) <= most for run, most in zip(runs, ceilings)] == [
         True] * len(ceilings), [(run.name, len(run.confidently_wrong)) for run in runs]

@@ -200,10 +200,12 @@ def test_auto_estimates_the_pose_through_the_profile(tmp_path, monkeypatch):
     (tmp_path / "lens.jpg").write_bytes(jpeg(photo, tags))
     (tmp_path / "plain.jpg").write_bytes(jpeg(photo, None))
     # the wall alone, its grid in two directions, is a frame another fits 94 % as well: its
-    # confidence is 0.50, at the default bar; what is tested here is the lens, not the bar
+    # confidence is 0.50, at the default bar, and 0.38 since its few "receding" segments
+    # count only where they meet beyond chance (none recede: a wall seen frontally); what is
+    # tested here is the lens, not the bar
     result = run_gsrwt("rectify", str(tmp_path), "--auto", "--focal", repr(focal), "-o",
                        str(tmp_path / "out"), "--table", str(tmp_path / "table.csv"), "-q",
-                       "--min-confidence", "0.4")
+                       "--min-confidence", "0.3")
     assert result.returncode in (0, 1), result.stderr
     rows = {row["image"].rsplit("/", 1)[-1]: row for row in read_table(tmp_path / "table.csv")}
     lens = rows["lens.jpg"]

@@ -90,7 +90,8 @@ def test_a_webcams_frames_given_its_focal_length_alone_are_checked_for_its_lens(
     is judged as its photo is. The photos' lens check refuses 9 of them (their poses 2.3 to 21
     degrees off what the straightened lines give); the frames went unchecked and were all 9
     accepted. Given the principal point too (a calibration's, which measures the lens), they
-    are taken as the pinhole they say, photos and frames alike."""
+    are taken as the pinhole they say, photos and frames alike. (Since a normal found only by
+    chance counts as unseen, 7 and 7: two boards are refused for their confidence first.)"""
     photos = sorted(DATA.glob("right*.jpg"))
     video = tmp_path / "webcam.mkv"
     grey = [read_image(photo) for photo in photos]  # as gsrwt decodes them: grey JPEGs
@@ -104,8 +105,8 @@ def test_a_webcams_frames_given_its_focal_length_alone_are_checked_for_its_lens(
         assert [(row["status"], row["error"]) for row in frames] == [
             (row["status"], row["error"]) for row in stills]
         bent = [row for row in frames if row["error"].startswith("the straight edges bend")]
-        assert len(bent) == (0 if extra else 9)
-        assert sum(row["status"] == "ok" for row in frames) == (9 if extra else 0)
+        assert len(bent) == (0 if extra else 7)
+        assert sum(row["status"] == "ok" for row in frames) == (7 if extra else 0)
 
 
 @pytest.mark.parametrize("arguments, message", [
