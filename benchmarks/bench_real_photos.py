@@ -340,12 +340,28 @@ def report_two_directions(runs: list[RunResult]) -> str:
     return "\n".join(lines)
 
 
+def _estimated_view(image: str, row: dict[str, str], pixels: np.ndarray, camera: Intrinsics
+                    ) -> PhotoResult:
+    """A York photo's ``pixels`` (shrunk, cropped...) estimated in this process with
+    ``camera`` given, and measured against its truth ``row``."""
+    from gsrwt_cli.api.estimate import DEFAULT_MIN_CONFIDENCE, estimate_pose
+
+    estimate = estimate_pose(pixels, camera)
+    ok = estimate.error is None and estimate.confidence >= DEFAULT_MIN_CONFIDENCE
+    errors = measure.image_errors(
+        measure.directions_from_pose(estimate.pose.pan, estimate.pose.tilt,
+                                     estimate.pose.roll) if ok else None,
+        true_directions(row))
+    return PhotoResult(image, "ok" if ok else "error", estimate.confidence, camera.focal,
+                       "sidecar", camera.focal, errors.vertical, errors.wall,
+                       estimate.error or "")
+
+
 def evaluate_smaller(data: Path, factors: tuple[float, ...] = SMALLER_FACTORS
                      ) -> list[RunResult]:
     """The York photos shrunk by each of ``factors`` (area averaging; 0.5 makes 320x240),
     their focal length and principal point scaled with them, estimated in this process with
     the focal length given and measured as the photos as taken are."""
-    from gsrwt_cli.api.estimate import DEFAULT_MIN_CONFIDENCE, estimate_pose
     from gsrwt_cli.geometry.camera import Intrinsics
 
     cv2.setNumThreads(1)
@@ -360,15 +376,7 @@ def evaluate_smaller(data: Path, factors: tuple[float, ...] = SMALLER_FACTORS
             focal, cx, cy = (float(row[key]) for key in ("focal_px", "cx", "cy"))
             camera = Intrinsics(focal * factor, focal * factor, (cx + 0.5) * factor - 0.5,
                                 (cy + 0.5) * factor - 0.5, width=size[0], height=size[1])
-            estimate = estimate_pose(pixels, camera)
-            ok = estimate.error is None and estimate.confidence >= DEFAULT_MIN_CONFIDENCE
-            errors = measure.image_errors(
-                measure.directions_from_pose(estimate.pose.pan, estimate.pose.tilt,
-                                             estimate.pose.roll) if ok else None,
-                true_directions(row))
-            photos.append(PhotoResult(image, "ok" if ok else "error", estimate.confidence,
-                                      camera.focal, "sidecar", camera.focal, errors.vertical,
-                                      errors.wall, estimate.error or ""))
+            photos.append(_estimated_view(image, row, pixels, camera))
         runs.append(RunResult(f"{size[0]}x{size[1]}", photos, 0.0, 0.0))
     return runs
 
@@ -404,7 +412,6 @@ def evaluate_telephoto(data: Path, fractions: tuple[float, ...] = TELEPHOTO_FRAC
     back to 640x480), estimated in this process with the focal length given and measured
     against the same truth: real scenes at 1.5 to 3.2 long sides of focal length, which the
     photos as taken (1.05) do not show."""
-    from gsrwt_cli.api.estimate import DEFAULT_MIN_CONFIDENCE, estimate_pose
     from gsrwt_cli.geometry.camera import Intrinsics
 
     cv2.setNumThreads(1)
@@ -419,16 +426,7 @@ def evaluate_telephoto(data: Path, fractions: tuple[float, ...] = TELEPHOTO_FRAC
                 view, camera = telephoto_view(
                     pixels, Intrinsics(focal, focal, cx, cy, width=width, height=height),
                     fraction, enlarge)
-                estimate = estimate_pose(view, camera)
-                ok = estimate.error is None and estimate.confidence >= DEFAULT_MIN_CONFIDENCE
-                errors = measure.image_errors(
-                    measure.directions_from_pose(estimate.pose.pan, estimate.pose.tilt,
-                                                 estimate.pose.roll) if ok else None,
-                    true_directions(row))
-                photos.append(PhotoResult(image, "ok" if ok else "error",
-                                          estimate.confidence, camera.focal, "sidecar",
-                                          camera.focal, errors.vertical, errors.wall,
-                                          estimate.error or ""))
+                photos.append(_estimated_view(image, row, view, camera))
             long_sides = camera.focal / max(camera.width or 1, camera.height or 1)
             name = (f"{round(width * fraction)}x{round(height * fraction)}"
                     f"{' enlarged' if enlarge else ''} (f {long_sides:.1f} long sides)")
