@@ -1122,9 +1122,8 @@ def false_alarms(lines: np.ndarray, pixel_from_camera: np.ndarray, directions: n
                  column: int, inlier_px: float) -> float:
     """``log10`` of how many directions met by as many segments chance alone would show:
     the number of false alarms of the direction ``directions[:, column]`` (the a-contrario
-    test of
-    Desolneux, Moisan and Morel, with which Almansa, Desolneux and Vamech find vanishing
-    points with no a priori information).
+    test of Desolneux, Moisan and Morel, with which Almansa, Desolneux and Vamech find
+    vanishing points with no a priori information).
 
     Under the null hypothesis the segments the frame's other two directions do not take run
     in random directions, each independently. Segment ``i`` then meets a given direction (its
