@@ -434,9 +434,9 @@ def evaluate_telephoto(data: Path, fractions: tuple[float, ...] = TELEPHOTO_FRAC
     return runs
 
 
-def report_smaller(runs: list[RunResult], title: str = "York photos shrunk (in process, "
+def report_views(runs: list[RunResult], title: str = "York photos shrunk (in process, "
                    "calibrated focal scaled with them)") -> str:
-    """The lines of :func:`evaluate_smaller` (or :func:`evaluate_telephoto`), as text."""
+    """The lines of :func:`evaluate_smaller` or :func:`evaluate_telephoto`, as text."""
     lines = [f"{title}: vertical median / p90 / worst | wall normal | refused | confidently "
              "wrong"]
     for run in runs:
@@ -879,10 +879,10 @@ def main() -> None:
         print(report_two_directions(evaluate_two_directions(data)))
     if arguments.smaller and not arguments.json:
         print()
-        print(report_smaller(evaluate_smaller(data)))
+        print(report_views(evaluate_smaller(data)))
     if arguments.telephoto and not arguments.json:
         print()
-        print(report_smaller(evaluate_telephoto(data), "York photos as a longer lens would "
+        print(report_views(evaluate_telephoto(data), "York photos as a longer lens would "
                              "have seen them (in process, calibrated focal)"))
 
 

@@ -1449,11 +1449,15 @@ def _estimate_known_focal(detected: np.ndarray, ideal: np.ndarray, camera: Intri
     needed = max(MIN_DIRECTION_SEGMENTS, math.ceil(MIN_DIRECTION_FRACTION * segments))
     found = int((support >= needed).sum())
     structure = _structure_of(ideal, camera, normals, half, frame.directions, inlier_px)
-    if found < 2:
+
+    def too_few(found: int, and_why: str = "") -> PoseEstimate:
         return _failure(f"only {found} of 3 directions found, {segments} segments (each "
-                        f"needs {needed} that meet in it and in no other); give the pose",
-                        detected, segments, found, camera.focal, estimated, frame.labels, structure,
-                        uncertainty)
+                        f"needs {needed} that meet in it and in no other{and_why}); give the "
+                        "pose", detected, segments, found, camera.focal, estimated,
+                        frame.labels, structure, uncertainty)
+
+    if found < 2:
+        return too_few(found)
     # the vertical and the frontal wall's normal whichever wall is reported: the refusals
     # and the confidence are the rotation's, not its naming's
     frontal = world_from_camera_of(frame.directions)[1]
@@ -1470,11 +1474,8 @@ def _estimate_known_focal(detected: np.ndarray, ideal: np.ndarray, camera: Intri
         support = np.where(np.arange(3) == frontal[2], 0, support)
         found = int((support >= needed).sum())
         if found < 2:
-            return _failure(f"only {found} of 3 directions found, {segments} segments (each "
-                            f"needs {needed} that meet in it and in no other, and those "
-                            "meeting in the direction receding from the camera no more than "
-                            "chance would); give the pose", detected, segments, found,
-                            camera.focal, estimated, frame.labels, structure, uncertainty)
+            return too_few(found, ", and those meeting in the direction receding from the "
+                                  "camera no more than chance would")
     # the refusals and the confidence judge the frame fitted as a whole (they were
     # calibrated on it); the pose is the one nearest each direction's own segments
     directions = reconcile_directions(normals, half, frame.directions, inlier_px)
