@@ -226,13 +226,18 @@ def checked(estimate: PoseEstimate, options: EstimateOptions) -> None:
         why += (f"; the vertical's and the wall's own lines point up to "
                 f"{estimate.misfit:.1f} deg from the fitted frame")
         if not estimate.normal_seen:
-            why += ("; no edges recede from the camera, or no more than chance would make "
-                    "meet: the wall's direction rests on its horizontals alone")
+            why += ("; no edges recede from the camera beyond chance: the wall's direction "
+                    "rests on its horizontals alone")
         if estimate.upright < UPRIGHT_NOTED:
             why += (f"; another of its directions is nearly as upright: the vertical taken "
                     f"is up with probability {estimate.upright:.2f}")
+        # what would settle it, as the estimator's own refusals say (an estimated focal
+        # length's uncertainty is one of the reasons the confidence weighs)
+        remedy = ("the focal length, the pose" if estimate.focal_uncertainty is not None
+                  else "the pose")
         raise EstimateError(f"confidence {shown_below(estimate.confidence, 2)} is below the "
-                            f"minimum {options.min_confidence:g} ({why})")
+                            f"minimum {options.min_confidence:g} ({why}); give {remedy}, or "
+                            "guides (--verticals)")
 
 
 def estimated_values(estimate: PoseEstimate, camera: Intrinsics | None, width: int,

@@ -8,6 +8,10 @@ from ..inputs.records import RecordError
 from ..io.outputs import OutsideOutputError
 from .settings import Describe
 
+#: Characters of a failure's line, at most: room for the longest of gsrwt's own reasons (a
+#: confidence refused with every one of its reasons and the remedy, about 480) whole.
+FAILURE_LIMIT = 1000
+
 
 class JobError(Exception):
     """A job that cannot be done, for the reason its text gives."""
@@ -27,4 +31,4 @@ def error_text(error: BaseException, describe: Describe | None = None) -> str:
         text = str(error)
     else:
         text = f"internal error: {type(error).__name__}: {error}"
-    return one_line(" ".join(text.split()), 500)
+    return one_line(" ".join(text.split()), FAILURE_LIMIT)

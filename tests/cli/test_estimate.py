@@ -70,6 +70,11 @@ def test_min_confidence_turns_weak_estimates_into_errors(tmp_path):
                        "-f", "json")
     assert result.returncode == 1
     assert "is below the minimum 1 (another orientation fits the lines" in result.stderr
+    # and says what would settle it; the focal length was given, so not that
+    assert "; give the pose, or guides (--verticals)\ngsrwt: 0 estimated, 1 failed" in result.stderr
+    result = run_gsrwt("estimate", str(image), "--min-confidence", "1", "-f", "json")
+    assert result.returncode == 1
+    assert "; give the focal length, the pose, or guides (--verticals)" in result.stderr
     result = run_gsrwt("estimate", str(image), "--focal", "280", "--min-confidence", "0.3",
                        "-f", "json")
     assert result.returncode == 0, result.stderr
