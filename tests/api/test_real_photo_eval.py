@@ -548,12 +548,15 @@ def test_york_photos_seen_through_a_longer_lens_are_no_worse_than_today():
     accepted, 8 of them more than 3 degrees off, nearly all in the wall's normal: its
     horizontals converge too little at that focal length, and short pieces of clutter meeting
     near the middle passed for the edges receding from the camera); 1, 4, 2, 2, 0, 3, 0, 5
-    once a normal found only by chance is taken as unseen (``false_alarms``). A ceiling, not a
-    goal: fewer is better."""
+    once a normal found only by chance is taken as unseen (``false_alarms``): 17 in all. A
+    ceiling, not a goal: fewer is better. LSD's segments come from floating-point code, and
+    a photo on the edge of 3 degrees may tip on another CPU: each run may have one more, and
+    all of them two more, than today (the old counts, 25 in all, fail)."""
     ceilings = (1, 4, 2, 2, 0, 3, 0, 5)
     runs = bench_real_photos.evaluate_telephoto(YORK)
-    assert [len(run.confidently_wrong) <= most for run, most in zip(runs, ceilings)] == [
-        True] * len(ceilings), [(run.name, len(run.confidently_wrong)) for run in runs]
+    counts = [len(run.confidently_wrong) for run in runs]
+    assert all(count <= most + 1 for count, most in zip(counts, ceilings)), counts
+    assert sum(counts) <= sum(ceilings) + 2, counts
 
 
 @needs_york
