@@ -195,6 +195,10 @@ WALL_CHOICES = ("frontal", "dominant")
 #: Names of the three directions, in the order of :attr:`PoseEstimate.vanishing_points`.
 DIRECTION_NAMES = ("vertical", "wall", "normal")
 
+#: How a refusal ends where guides would settle the pose: a photo takes them, a video's frames
+#: do not (:func:`gsrwt_cli.batch.estimate_jobs.without_guides`).
+GUIDES_REMEDY = ", or guides (--verticals)"
+
 
 @dataclass(frozen=True)
 class PoseEstimate:
@@ -1408,18 +1412,17 @@ def _refusal(structure: float, uncertainty: FocalUncertainty | None,
         remedy = "the focal length, the pose" if uncertainty is not None else "the pose"
         return (f"no clear man-made structure: the straight segments fit three orthogonal "
                 f"directions only {shown_below(structure)} times as well as random ones do "
-                f"(need {MIN_STRUCTURE_RATIO:g}); give {remedy}, or guides (--verticals)")
+                f"(need {MIN_STRUCTURE_RATIO:g}); give {remedy}{GUIDES_REMEDY}")
     if vertical_segments is not None and vertical_segments[0] < vertical_segments[1]:
         count = vertical_segments[0]
         runs = ("no segment runs" if count == 0 else
                 "only 1 segment runs" if count == 1 else f"only {count} segments run")
         return (f"no vertical structure: {runs} along the vertical found and no other "
-                f"direction (need {vertical_segments[1]}); give the pose, or guides "
-                "(--verticals)")
+                f"direction (need {vertical_segments[1]}); give the pose{GUIDES_REMEDY}")
     if vertical < MIN_VERTICAL_RATIO:
         return (f"no vertical structure: the segments along the vertical found fit it only "
                 f"{shown_below(vertical)} times as well as a random direction (need "
-                f"{MIN_VERTICAL_RATIO:g}); give the pose, or guides (--verticals)")
+                f"{MIN_VERTICAL_RATIO:g}); give the pose{GUIDES_REMEDY}")
     if uncertainty is not None and not uncertainty.degrees <= MAX_FOCAL_DEGREES:
         if math.isinf(uncertainty.degrees):
             return ("focal length not determinable from this view: the segments do not pin "

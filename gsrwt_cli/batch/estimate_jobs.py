@@ -22,6 +22,7 @@ from ..api.estimate import (
     DEFAULT_MIN_CONFIDENCE,
     DIRECTION_NAMES,
     EXIF_FOCAL_SPREAD,
+    GUIDES_REMEDY,
     WALL_CHOICES,
     EstimateError,
     PoseEstimate,
@@ -236,8 +237,18 @@ def checked(estimate: PoseEstimate, options: EstimateOptions) -> None:
         remedy = ("the focal length, the pose" if estimate.focal_uncertainty is not None
                   else "the pose")
         raise EstimateError(f"confidence {shown_below(estimate.confidence, 2)} is below the "
-                            f"minimum {options.min_confidence:g} ({why}); give {remedy}, or "
-                            "guides (--verticals)")
+                            f"minimum {options.min_confidence:g} ({why}); give {remedy}"
+                            f"{GUIDES_REMEDY}")
+
+
+def without_guides(reason: str) -> str:
+    """A refusal's ``reason`` for a frame of a video or a bag, which takes no guides: the
+    remedy ends at the focal length or the pose (``gsrwt estimate VIDEO --verticals`` is a
+    usage error)."""
+    if not reason.endswith(GUIDES_REMEDY):
+        return reason
+    return reason[:-len(GUIDES_REMEDY)].replace("give the focal length, the pose",
+                                                 "give the focal length or the pose")
 
 
 def estimated_values(estimate: PoseEstimate, camera: Intrinsics | None, width: int,

@@ -115,7 +115,13 @@ class EstimateFrames:
     def __call__(self, frame: SequenceFrame) -> list[Row]:
         from ..api.estimate import EstimateError, estimate_pose
         from ..inputs.records import view_from_values
-        from .estimate_jobs import checked, estimate_row, estimated_values, lens_unknown
+        from .estimate_jobs import (
+            checked,
+            estimate_row,
+            estimated_values,
+            lens_unknown,
+            without_guides,
+        )
 
         assert frame.pixels is not None
         height, width = frame.pixels.shape[:2]
@@ -141,7 +147,7 @@ class EstimateFrames:
         try:
             checked(estimate, self.options)
         except EstimateError as error:
-            return [{**row, "status": "error", "error": str(error)}]
+            return [{**row, "status": "error", "error": without_guides(str(error))}]
         row.update(estimated_values(estimate, camera, width, height, principal_point))
         return [{**row, "status": "ok"}]
 

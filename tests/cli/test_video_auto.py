@@ -91,7 +91,8 @@ def test_a_webcams_frames_given_its_focal_length_alone_are_checked_for_its_lens(
     degrees off what the straightened lines give); the frames went unchecked and were all 9
     accepted. Given the principal point too (a calibration's, which measures the lens), they
     are taken as the pinhole they say, photos and frames alike. (Since a normal found only by
-    chance counts as unseen, 7 and 7: two boards are refused for their confidence first.)"""
+    chance counts as unseen, 7 and 7: two boards are refused for their confidence first; their
+    frames' reason does not offer guides, which a video does not take.)"""
     photos = sorted(DATA.glob("right*.jpg"))
     video = tmp_path / "webcam.mkv"
     grey = [read_image(photo) for photo in photos]  # as gsrwt decodes them: grey JPEGs
@@ -102,11 +103,35 @@ def test_a_webcams_frames_given_its_focal_length_alone_are_checked_for_its_lens(
                                       "-f", "csv").stdout)
         frames = read_table(run_gsrwt("estimate", video, "--focal", "537", *extra,
                                       "-f", "csv").stdout)
+        # the same, but that a video's frames take no guides (a usage error)
         assert [(row["status"], row["error"]) for row in frames] == [
-            (row["status"], row["error"]) for row in stills]
+            (row["status"], row["error"].replace(", or guides (--verticals)", ""))
+            for row in stills]
+        assert not any("--verticals" in row["error"] for row in frames)
         bent = [row for row in frames if row["error"].startswith("the straight edges bend")]
         assert len(bent) == (0 if extra else 7)
         assert sum(row["status"] == "ok" for row in frames) == (7 if extra else 0)
+
+
+def test_a_refused_frame_says_what_would_settle_it_for_a_video(tmp_path):
+    """scikit-image's cat (``chelsea.jpg``) as the two frames of a video, no focal length: each
+    is refused as its photo is, "no clear man-made structure", and the remedy is what a video
+    takes: the focal length or the pose, not guides (``--verticals`` is a usage error for a
+    video)."""
+    photo = DATA / "real" / "chelsea.jpg"
+    still = read_table(run_gsrwt("estimate", photo, "-f", "csv").stdout)[0]["error"]
+    assert still.endswith("; give the focal length, the pose, or guides (--verticals)")
+    pixels = read_image(photo)
+    video = tmp_path / "cat.mkv"
+    write_video(video, [pixels, pixels], [0, 100], rate=10)
+    result = run_gsrwt("estimate", video, "-f", "csv")
+    assert result.returncode == 1
+    frames = read_table(result.stdout)
+    assert [row["error"] for row in frames] == [still.replace(
+        "; give the focal length, the pose, or guides (--verticals)",
+        "; give the focal length or the pose")] * 2
+    usage = run_gsrwt("estimate", video, "--verticals", "1,1,1,9;5,1,5,9")
+    assert usage.returncode == 2 and "--verticals does not apply to a video" in usage.stderr
 
 
 @pytest.mark.parametrize("arguments, message", [
