@@ -1294,8 +1294,8 @@ def estimate_pose(
     detected = detect_segments(image) if lines is None else _usable_segments(lines)
     segments = len(detected)
     if segments < MIN_SEGMENTS:
-        return _failure(f"too few straight segments: {segments} (need {MIN_SEGMENTS})",
-                        detected, segments)
+        return _failure(f"too few straight segments: {segments} (need {MIN_SEGMENTS}); give "
+                        f"the pose{GUIDES_REMEDY}", detected, segments)
     diagonal = math.hypot(width, height)
     inlier_px = inlier_distance(width, height)
     ideal = detected
@@ -1456,7 +1456,7 @@ def _estimate_known_focal(detected: np.ndarray, ideal: np.ndarray, camera: Intri
     def too_few(found: int, and_why: str = "") -> PoseEstimate:
         return _failure(f"only {found} of 3 directions found, {segments} segments (each "
                         f"needs {needed} that meet in it and in no other{and_why}); give the "
-                        "pose", detected, segments, found, camera.focal, estimated,
+                        f"pose{GUIDES_REMEDY}", detected, segments, found, camera.focal, estimated,
                         frame.labels, structure, uncertainty)
 
     if found < 2:

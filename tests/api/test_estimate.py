@@ -141,7 +141,8 @@ def test_images_that_cannot_tell_give_an_error_and_no_pose():
     assert estimate.pose is None
     assert estimate.error.startswith("only 1 of 3 directions found, ")
     assert estimate.error.endswith(f"{estimate.segments} segments (each needs 5 that meet in "
-                                   "it and in no other); give the pose")
+                                   "it and in no other); give the pose, or guides "
+                                   "(--verticals)")
 
 
 def test_a_camera_of_another_size_is_refused():
