@@ -567,9 +567,11 @@ def test_york_walls_seen_frontally_are_right_or_less_sure():
     (7 before the misfit weighed the wall's horizontal where no edge recedes and the
     confidence's offset for such walls, 5 before a direction was found only through segments
     no other direction explains); the mean confidence 0.743 against 0.744 within (0.79
-    against 0.70 at first). Corridors: 48, 43, 2; 0.839 against 0.896."""
+    against 0.70 at first). Corridors: 48, 43, 2; 0.839 against 0.896. The frontal walls'
+    ceiling is one over today's: `P1080023` sits at 2.95 degrees, 0.05 from the bar, and may
+    tip on another CPU (LSD's segments come from floating-point code)."""
     frontal, corridor = bench_real_photos.evaluate_two_directions(YORK)
-    for run, least_ok, least_within, most_wrong in ((frontal, 42, 31, 4),
+    for run, least_ok, least_within, most_wrong in ((frontal, 42, 31, 5),
                                                      (corridor, 46, 42, 2)):
         ok = [p for p in run.photos if p.status == "ok"]
         within = [measure.is_within(measure.ImageErrors(p.vertical, p.wall)) for p in ok]
