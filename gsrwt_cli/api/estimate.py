@@ -1488,8 +1488,8 @@ def _estimate_known_focal(detected: np.ndarray, ideal: np.ndarray, camera: Intri
         world_from_camera, order = world_from_camera_of(directions, lengths, wall)
         pose = pose_from_rotation(world_from_camera)
     except (PoseError, ValueError) as error:
-        return _failure(f"no pose: {error}", detected, segments, found, camera.focal, estimated,
-                        frame.labels)
+        return _failure(f"no pose: {error}; give the pose", detected, segments, found,
+                        camera.focal, estimated, frame.labels)
     # the directions that pin the pose: the vertical and the frontal wall's normal, or where
     # no edge recedes from the camera (a wall seen frontally) the wall's horizontal instead
     normal_seen = bool(support[frontal[2]] >= MIN_DIRECTION_SEGMENTS)
