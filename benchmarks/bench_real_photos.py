@@ -28,13 +28,14 @@ Last, OpenCV's chessboard photos of its two webcams (``tests/data/right*.jpg``,
 and measured against its pose (:func:`evaluate_chessboards`).
 
     python benchmarks/bench_real_photos.py [PATH-TO-york-urban-train] [--json] [--jobs N]
-        [--two-directions] [--smaller] [--telephoto]
+        [--two-directions] [--smaller] [--telephoto] [--altered]
     python benchmarks/bench_real_photos.py --survey FOLDER [--long-side 640]
 
 ``--two-directions`` adds the York photos seen with one horizontal direction's edges left out
 (:func:`evaluate_two_directions`): views of a wall about frontally, and of a corridor.
 ``--smaller`` adds them shrunk (:func:`evaluate_smaller`), ``--telephoto`` cropped around the
-principal point as a longer lens would have seen them (:func:`evaluate_telephoto`).
+principal point as a longer lens would have seen them (:func:`evaluate_telephoto`),
+``--altered`` re-encoded, noisier, blurred, brightened and darkened (:func:`evaluate_altered`).
 ``--survey FOLDER`` only estimates every photo of a folder nobody measured
 (:func:`survey_photos`), to look for photos that get a pose they should not.
 
@@ -277,6 +278,30 @@ SMALLER_FACTORS = (0.75, 0.5)
 TELEPHOTO_FRACTIONS = (0.7, 0.5, 0.4, 1 / 3)
 
 
+def _recompressed(pixels: np.ndarray, quality: int) -> np.ndarray:
+    """``pixels`` through a JPEG of ``quality`` (OpenCV's encoder), decoded again."""
+    encoded = cv2.imencode(".jpg", pixels, [cv2.IMWRITE_JPEG_QUALITY, quality])[1]
+    return cv2.imdecode(encoded, cv2.IMREAD_COLOR)
+
+
+def _with_noise(pixels: np.ndarray, sigma: float, seed: int) -> np.ndarray:
+    """``pixels`` plus Gaussian noise of ``sigma`` grey levels (seeded), rounded and clipped."""
+    noise = np.random.default_rng(seed).normal(0.0, sigma, pixels.shape)
+    return np.clip(np.rint(pixels + noise), 0, 255).astype(np.uint8)
+
+
+#: What a photo may go through before it reaches gsrwt, none of which moves its geometry
+#: (:func:`evaluate_altered`): each takes the pixels and the photo's index (a seed).
+ALTERATIONS = {
+    "JPEG quality 60": lambda pixels, index: _recompressed(pixels, 60),
+    "noise 4 grey levels": lambda pixels, index: _with_noise(pixels, 4.0, index),
+    "blurred 1 px": lambda pixels, index: cv2.GaussianBlur(pixels, (0, 0), 1.0),
+    "shadows brightened (gamma 0.6)": lambda pixels, index: np.rint(
+        255.0 * (pixels / 255.0) ** 0.6).astype(np.uint8),
+    "underexposed (x0.35)": lambda pixels, index: np.rint(pixels * 0.35).astype(np.uint8),
+}
+
+
 def estimates_without(data: Path, dropped: str) -> Iterator[tuple[str, object,
                                                                  measure.SceneDirections]]:
     """Each York photo (in sorted order) seen with one true direction's edges gone, in this
@@ -431,6 +456,27 @@ def evaluate_telephoto(data: Path, fractions: tuple[float, ...] = TELEPHOTO_FRAC
             name = (f"{round(width * fraction)}x{round(height * fraction)}"
                     f"{' enlarged' if enlarge else ''} (f {long_sides:.1f} long sides)")
             runs.append(RunResult(name, photos, 0.0, 0.0))
+    return runs
+
+
+def evaluate_altered(data: Path) -> list[RunResult]:
+    """The York photos as they might reach gsrwt after a messaging app, a noisier sensor, a
+    softer lens or another exposure (:data:`ALTERATIONS`), estimated in this process with the
+    calibrated focal length and measured against the same truth: the same scenes, pixels that
+    differ as another photographer's would."""
+    from gsrwt_cli.geometry.camera import Intrinsics
+
+    cv2.setNumThreads(1)
+    runs = []
+    for name, alter in ALTERATIONS.items():
+        photos = []
+        for index, (image, row) in enumerate(sorted(read_truth(data).items())):
+            pixels = cv2.imread(str(data / "images" / image))
+            height, width = pixels.shape[:2]
+            focal, cx, cy = (float(row[key]) for key in ("focal_px", "cx", "cy"))
+            photos.append(_estimated_view(image, row, alter(pixels, index), Intrinsics(
+                focal, focal, cx, cy, width=width, height=height)))
+        runs.append(RunResult(name, photos, 0.0, 0.0))
     return runs
 
 
@@ -832,6 +878,9 @@ def main() -> None:
     parser.add_argument("--telephoto", action="store_true",
                         help="also the York photos cropped around their principal point, as "
                              "a longer lens would have seen them")
+    parser.add_argument("--altered", action="store_true",
+                        help="also the York photos re-encoded, noisier, blurred, brightened "
+                             "and darkened")
     arguments = parser.parse_args()
     if arguments.survey is not None:
         surveyed = survey_photos(arguments.survey, long_side=arguments.long_side)
@@ -884,6 +933,10 @@ def main() -> None:
         print()
         print(report_views(evaluate_telephoto(data), "York photos as a longer lens would "
                              "have seen them (in process, calibrated focal)"))
+    if arguments.altered and not arguments.json:
+        print()
+        print(report_views(evaluate_altered(data), "York photos altered (in process, "
+                                                   "calibrated focal)"))
 
 
 if __name__ == "__main__":
