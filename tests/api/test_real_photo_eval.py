@@ -566,9 +566,10 @@ def test_york_photos_altered_on_their_way_are_right_or_refused():
     pixels that differ as another photographer's would. 2026-12-04: confidently wrong 2, 1,
     1, 1, 1 (`P1030004` in each, whose labelled segments' own frame is 3 degrees off its
     truth; `P1040822` re-encoded, at 0.51: as taken it is refused at 0.06), refused 0, 2, 3,
-    1, 2, within 2 degrees 45, 45, 45, 47, 43 of 51, and the confidence never above the
-    fraction within (0.86 to 0.87 against 0.88 to 0.94). Ceilings one over today's (a photo
-    sits at 0.51, one at 2.9 degrees), floors one under."""
+    1, 2, within 2 degrees 45, 45, 45, 47, 43 of 51, and the mean confidence below the
+    fraction within in each (0.86 to 0.87 against 0.88 to 0.94). Ceilings one over today's (a
+    photo sits at 0.51, one at 2.9 degrees), floors one under, and the confidence at most 0.05
+    above the fraction within: not trusted more than it is right."""
     runs = bench_real_photos.evaluate_altered(YORK)
     assert [run.name for run in runs] == list(bench_real_photos.ALTERATIONS)
     for run, most_wrong in zip(runs, (2, 1, 1, 1, 1)):
@@ -580,8 +581,9 @@ def test_york_photos_altered_on_their_way_are_right_or_refused():
 
 
 def test_an_alteration_keeps_the_photo_as_it_was_taken():
-    """The alterations change pixel values only: size and type kept, every pixel within what
-    the alteration allows of the photo's (a seeded noise, the same twice)."""
+    """The alterations change pixel values only: size and type kept, the same twice (the
+    noise is seeded), the noise of the spread its name gives and the underexposure the
+    scaling."""
     photo = cv2.imread(str(DATA / "facade" / "building.jpg"))
     for name, alter in bench_real_photos.ALTERATIONS.items():
         altered = alter(photo, 7)
