@@ -365,18 +365,32 @@ def report_two_directions(runs: list[RunResult]) -> str:
     return "\n".join(lines)
 
 
-def _estimated_view(image: str, row: dict[str, str], pixels: np.ndarray, camera: Intrinsics
-                    ) -> PhotoResult:
+def _estimated_view(image: str, row: dict[str, str], pixels: np.ndarray, camera: Intrinsics,
+                    exif: bool = False) -> PhotoResult:
     """A York photo's ``pixels`` (shrunk, cropped...) estimated in this process with
-    ``camera`` given, and measured against its truth ``row``."""
-    from gsrwt_cli.api.estimate import DEFAULT_MIN_CONFIDENCE, estimate_pose
+    ``camera`` given, and measured against its truth ``row``. ``exif``: ``camera``'s focal
+    length is EXIF's, and is treated as ``gsrwt estimate`` treats it: refined by the segments
+    (:data:`~gsrwt_cli.api.estimate.EXIF_FOCAL_SPREAD`), the estimate checked for a lens."""
+    from gsrwt_cli.api.estimate import DEFAULT_MIN_CONFIDENCE, EXIF_FOCAL_SPREAD, estimate_pose
 
-    estimate = estimate_pose(pixels, camera)
+    if exif:
+        from gsrwt_cli.api.lens_lines import checked_for_a_lens
+
+        estimate = checked_for_a_lens(pixels, estimate_pose(
+            pixels, camera, focal_spread=EXIF_FOCAL_SPREAD), camera=camera)
+    else:
+        estimate = estimate_pose(pixels, camera)
     ok = estimate.error is None and estimate.confidence >= DEFAULT_MIN_CONFIDENCE
     errors = measure.image_errors(
         measure.directions_from_pose(estimate.pose.pan, estimate.pose.tilt,
                                      estimate.pose.roll) if ok else None,
         true_directions(row))
+    # the view's true focal length: the one given (scaled with a shrunk or cropped view), or
+    # with EXIF's the calibrated one (the photo as taken)
+    if exif:
+        return PhotoResult(image, "ok" if ok else "error", estimate.confidence, estimate.focal,
+                           "exif+lines", float(row["focal_px"]), errors.vertical, errors.wall,
+                           estimate.error or "")
     return PhotoResult(image, "ok" if ok else "error", estimate.confidence, camera.focal,
                        "sidecar", camera.focal, errors.vertical, errors.wall,
                        estimate.error or "")
@@ -459,23 +473,33 @@ def evaluate_telephoto(data: Path, fractions: tuple[float, ...] = TELEPHOTO_FRAC
     return runs
 
 
-def evaluate_altered(data: Path) -> list[RunResult]:
+def evaluate_altered(data: Path, exif: bool = False) -> list[RunResult]:
     """The York photos as they might reach gsrwt after a messaging app, a noisier sensor, a
-    softer lens or another exposure (:data:`ALTERATIONS`), estimated in this process with the
-    calibrated focal length and measured against the same truth: the same scenes, pixels that
-    differ as another photographer's would."""
+    softer lens or another exposure (:data:`ALTERATIONS`), estimated in this process and
+    measured against the same truth: the same scenes, pixels that differ as another
+    photographer's would. With the calibrated focal length and principal point, or (``exif``)
+    as a photographer gives them: the focal length from the photo's EXIF (as ``gsrwt
+    estimate`` reads it, refined by the segments), the principal point the image's centre."""
     from gsrwt_cli.geometry.camera import Intrinsics
+    from gsrwt_cli.inputs.exif import focal_from_exif
 
     cv2.setNumThreads(1)
     runs = []
     for name, alter in ALTERATIONS.items():
         photos = []
         for index, (image, row) in enumerate(sorted(read_truth(data).items())):
-            pixels = cv2.imread(str(data / "images" / image))
+            path = data / "images" / image
+            pixels = cv2.imread(str(path))
             height, width = pixels.shape[:2]
-            focal, cx, cy = (float(row[key]) for key in ("focal_px", "cx", "cy"))
-            photos.append(_estimated_view(image, row, alter(pixels, index), Intrinsics(
-                focal, focal, cx, cy, width=width, height=height)))
+            if exif:
+                taken = focal_from_exif(path.read_bytes(), width, height)
+                assert taken is not None, f"{image} has no EXIF focal length"
+                camera = Intrinsics(taken.fx, taken.fy, (width - 1) / 2, (height - 1) / 2,
+                                    width=width, height=height)
+            else:
+                focal, cx, cy = (float(row[key]) for key in ("focal_px", "cx", "cy"))
+                camera = Intrinsics(focal, focal, cx, cy, width=width, height=height)
+            photos.append(_estimated_view(image, row, alter(pixels, index), camera, exif))
         runs.append(RunResult(name, photos, 0.0, 0.0))
     return runs
 
@@ -937,6 +961,8 @@ def main() -> None:
         print()
         print(report_views(evaluate_altered(data), "York photos altered (in process, "
                                                    "calibrated focal)"))
+        print(report_views(evaluate_altered(data, exif=True), "... as a photographer gives "
+                                                              "them (EXIF focal, refined)"))
 
 
 if __name__ == "__main__":
