@@ -245,7 +245,9 @@ def run_stream_command(job: StreamJob, outdir: Path | Location, settings: Settin
     if stopped is not None:
         summary += f", {counts.interrupted} not done"
     where = "" if table.path == "-" else f"; table: {table.path}"
-    end_batch(f"{summary}; output: {output}", where, stopped, counts.failed, run.quiet)
+    # a video whose every frame failed leaves no output: the line does not name one
+    written = f"output: {output}" if os.path.lexists(output) else "no output written"
+    end_batch(f"{summary}; {written}", where, stopped, counts.failed, run.quiet)
 
 
 def _run(job: StreamJob, settings: Settings, table: Any, run: Any,

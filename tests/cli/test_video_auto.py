@@ -132,6 +132,13 @@ def test_a_refused_frame_says_what_would_settle_it_for_a_video(tmp_path):
         "; give the focal length or the pose")] * 2
     usage = run_gsrwt("estimate", video, "--verticals", "1,1,1,9;5,1,5,9")
     assert usage.returncode == 2 and "--verticals does not apply to a video" in usage.stderr
+    # rectify --auto: the same reason for each frame, and no video, which the summary says
+    rectified = run_gsrwt("rectify", video, "--auto", "-o", tmp_path / "out")
+    assert rectified.returncode == 1
+    assert "give the focal length or the pose; no frame's estimate was accepted" in (
+        rectified.stderr)
+    assert "0 frames ok, 0 skipped, 2 failed; no output written" in rectified.stderr
+    assert sorted(path.name for path in (tmp_path / "out").iterdir()) == ["cat.csv"]
 
 
 @pytest.mark.parametrize("arguments, message", [
