@@ -371,13 +371,11 @@ def _estimated_view(image: str, row: dict[str, str], pixels: np.ndarray, camera:
     ``camera`` given, and measured against its truth ``row``. ``exif``: ``camera``'s focal
     length is EXIF's, and is treated as ``gsrwt estimate`` treats it: refined by the segments
     (:data:`~gsrwt_cli.api.estimate.EXIF_FOCAL_SPREAD`), the estimate checked for a lens."""
-    from gsrwt_cli.api.estimate import DEFAULT_MIN_CONFIDENCE, EXIF_FOCAL_SPREAD, estimate_pose
+    from gsrwt_cli.api.estimate import DEFAULT_MIN_CONFIDENCE, estimate_pose
+    from gsrwt_cli.batch.estimate_jobs import EstimateOptions, estimate_as_given
 
     if exif:
-        from gsrwt_cli.api.lens_lines import checked_for_a_lens
-
-        estimate = checked_for_a_lens(pixels, estimate_pose(
-            pixels, camera, focal_spread=EXIF_FOCAL_SPREAD), camera=camera)
+        estimate = estimate_as_given(pixels, camera, "exif", {}, None, EstimateOptions())
     else:
         estimate = estimate_pose(pixels, camera)
     ok = estimate.error is None and estimate.confidence >= DEFAULT_MIN_CONFIDENCE
@@ -387,13 +385,10 @@ def _estimated_view(image: str, row: dict[str, str], pixels: np.ndarray, camera:
         true_directions(row))
     # the view's true focal length: the one given (scaled with a shrunk or cropped view), or
     # with EXIF's the calibrated one (the photo as taken)
-    if exif:
-        return PhotoResult(image, "ok" if ok else "error", estimate.confidence, estimate.focal,
-                           "exif+lines", float(row["focal_px"]), errors.vertical, errors.wall,
-                           estimate.error or "")
-    return PhotoResult(image, "ok" if ok else "error", estimate.confidence, camera.focal,
-                       "sidecar", camera.focal, errors.vertical, errors.wall,
-                       estimate.error or "")
+    focal, source, true_focal = ((estimate.focal, "exif+lines", float(row["focal_px"])) if exif
+                                 else (camera.focal, "sidecar", camera.focal))
+    return PhotoResult(image, "ok" if ok else "error", estimate.confidence, focal, source,
+                       true_focal, errors.vertical, errors.wall, estimate.error or "")
 
 
 def evaluate_smaller(data: Path, factors: tuple[float, ...] = SMALLER_FACTORS

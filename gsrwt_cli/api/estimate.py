@@ -200,6 +200,12 @@ DIRECTION_NAMES = ("vertical", "wall", "normal")
 GUIDES_REMEDY = ", or guides (--verticals)"
 
 
+def remedy(focal_estimated: bool = False) -> str:
+    """How a refusal ends: what would settle the pose (the focal length first where it was
+    estimated, whose uncertainty is then one of the reasons)."""
+    return f"give {'the focal length, ' if focal_estimated else ''}the pose{GUIDES_REMEDY}"
+
+
 @dataclass(frozen=True)
 class PoseEstimate:
     """What :func:`estimate_pose` found in one image.
@@ -1294,8 +1300,8 @@ def estimate_pose(
     detected = detect_segments(image) if lines is None else _usable_segments(lines)
     segments = len(detected)
     if segments < MIN_SEGMENTS:
-        return _failure(f"too few straight segments: {segments} (need {MIN_SEGMENTS}); give "
-                        f"the pose{GUIDES_REMEDY}", detected, segments)
+        return _failure(f"too few straight segments: {segments} (need {MIN_SEGMENTS}); "
+                        f"{remedy()}", detected, segments)
     diagonal = math.hypot(width, height)
     inlier_px = inlier_distance(width, height)
     ideal = detected
@@ -1409,20 +1415,19 @@ def _refusal(structure: float, uncertainty: FocalUncertainty | None,
     if structure < MIN_STRUCTURE_RATIO:
         # with a focal length given the null model is judged there: a cabin's photo, 4.47
         # times at its own estimate, fits 4.5 to 4.8 times at 400 to 640 px
-        remedy = "the focal length, the pose" if uncertainty is not None else "the pose"
         return (f"no clear man-made structure: the straight segments fit three orthogonal "
                 f"directions only {shown_below(structure)} times as well as random ones do "
-                f"(need {MIN_STRUCTURE_RATIO:g}); give {remedy}{GUIDES_REMEDY}")
+                f"(need {MIN_STRUCTURE_RATIO:g}); {remedy(uncertainty is not None)}")
     if vertical_segments is not None and vertical_segments[0] < vertical_segments[1]:
         count = vertical_segments[0]
         runs = ("no segment runs" if count == 0 else
                 "only 1 segment runs" if count == 1 else f"only {count} segments run")
         return (f"no vertical structure: {runs} along the vertical found and no other "
-                f"direction (need {vertical_segments[1]}); give the pose{GUIDES_REMEDY}")
+                f"direction (need {vertical_segments[1]}); {remedy()}")
     if vertical < MIN_VERTICAL_RATIO:
         return (f"no vertical structure: the segments along the vertical found fit it only "
                 f"{shown_below(vertical)} times as well as a random direction (need "
-                f"{MIN_VERTICAL_RATIO:g}); give the pose{GUIDES_REMEDY}")
+                f"{MIN_VERTICAL_RATIO:g}); {remedy()}")
     if uncertainty is not None and not uncertainty.degrees <= MAX_FOCAL_DEGREES:
         if math.isinf(uncertainty.degrees):
             return ("focal length not determinable from this view: the segments do not pin "
@@ -1455,8 +1460,8 @@ def _estimate_known_focal(detected: np.ndarray, ideal: np.ndarray, camera: Intri
 
     def too_few(found: int, and_why: str = "") -> PoseEstimate:
         return _failure(f"only {found} of 3 directions found, {segments} segments (each "
-                        f"needs {needed} that meet in it and in no other{and_why}); give the "
-                        f"pose{GUIDES_REMEDY}", detected, segments, found, camera.focal, estimated,
+                        f"needs {needed} that meet in it and in no other{and_why}); "
+                        f"{remedy()}", detected, segments, found, camera.focal, estimated,
                         frame.labels, structure, uncertainty)
 
     if found < 2:

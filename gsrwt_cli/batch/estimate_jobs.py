@@ -27,6 +27,7 @@ from ..api.estimate import (
     EstimateError,
     PoseEstimate,
     estimate_pose,
+    remedy,
 )
 from ..base.messages import shown_below
 from ..geometry.camera import Intrinsics
@@ -146,6 +147,25 @@ def lens_unknown(camera: Intrinsics | None, source: str, values: Mapping[str, An
         values.get(name) in (None, "") for name in ("cx", "cy")))
 
 
+def estimate_as_given(image: np.ndarray, camera: Intrinsics | None, source: str,
+                      values: Mapping[str, Any], principal_point: tuple[float, float] | None,
+                      options: EstimateOptions) -> PoseEstimate:
+    """The pose of ``image`` from its lines as ``gsrwt estimate`` makes it of a photo or a
+    video's frame, given ``camera`` (None: none at all) from ``source`` with the user's
+    ``values``: an EXIF focal length, a few per cent off, refined by the segments where
+    they pin it (:data:`~gsrwt_cli.api.estimate.EXIF_FOCAL_SPREAD`); the estimate checked
+    for a lens nobody calibrated (:func:`lens_unknown`), whose bent edges mislead."""
+    spread = EXIF_FOCAL_SPREAD if source == "exif" and camera is not None else 0.0
+    estimate = estimate_pose(image, camera, principal_point=principal_point, wall=options.wall,
+                             focal_spread=spread)
+    if lens_unknown(camera, source, values):
+        from ..api.lens_lines import checked_for_a_lens
+
+        estimate = checked_for_a_lens(image, estimate, principal_point, options.min_confidence,
+                                      camera=camera)
+    return estimate
+
+
 def estimate_file(path: Path, values: Mapping[str, Any], where: str, options: EstimateOptions
                   ) -> tuple[PoseEstimate, Intrinsics | None, str, np.ndarray, dict[str, Any]]:
     """Read ``path`` and estimate its pose: the estimate, the camera it was given (None when
@@ -182,16 +202,8 @@ def estimate_file(path: Path, values: Mapping[str, Any], where: str, options: Es
                 camera = Intrinsics(camera.fx, camera.fy, camera.cx, camera.cy, camera.skew,
                                     camera.width, camera.height, found.lens())
         return estimate, camera, source, image, lens
-    # an EXIF focal length is a few per cent off: the segments refine it where they pin it
-    spread = EXIF_FOCAL_SPREAD if source == "exif" and camera is not None else 0.0
-    estimate = estimate_pose(image, camera, principal_point=principal_point, wall=options.wall,
-                             focal_spread=spread)
-    if lens_unknown(camera, source, values):  # an uncalibrated lens's bent edges mislead
-        from ..api.lens_lines import checked_for_a_lens
-
-        estimate = checked_for_a_lens(image, estimate, principal_point, options.min_confidence,
-                                      camera=camera)
-    if spread and camera is not None and estimate.focal_estimated and estimate.focal:
+    estimate = estimate_as_given(image, camera, source, values, principal_point, options)
+    if source == "exif" and camera is not None and estimate.focal_estimated and estimate.focal:
         camera = Intrinsics(estimate.focal, estimate.focal, camera.cx, camera.cy, camera.skew,
                             camera.width, camera.height, camera.lens)
         source = "exif+lines"
@@ -232,13 +244,10 @@ def checked(estimate: PoseEstimate, options: EstimateOptions) -> None:
         if estimate.upright < UPRIGHT_NOTED:
             why += (f"; another of its directions is nearly as upright: the vertical taken "
                     f"is up with probability {estimate.upright:.2f}")
-        # what would settle it, as the estimator's own refusals say (an estimated focal
-        # length's uncertainty is one of the reasons the confidence weighs)
-        remedy = ("the focal length, the pose" if estimate.focal_uncertainty is not None
-                  else "the pose")
+        # what would settle it, as the estimator's own refusals say
         raise EstimateError(f"confidence {shown_below(estimate.confidence, 2)} is below the "
-                            f"minimum {options.min_confidence:g} ({why}); give {remedy}"
-                            f"{GUIDES_REMEDY}")
+                            f"minimum {options.min_confidence:g} ({why}); "
+                            f"{remedy(estimate.focal_uncertainty is not None)}")
 
 
 def without_guides(reason: str) -> str:

@@ -113,13 +113,13 @@ class EstimateFrames:
         return "camera" if self.own.get("camera") else "estimated"
 
     def __call__(self, frame: SequenceFrame) -> list[Row]:
-        from ..api.estimate import EstimateError, estimate_pose
+        from ..api.estimate import EstimateError
         from ..inputs.records import view_from_values
         from .estimate_jobs import (
             checked,
+            estimate_as_given,
             estimate_row,
             estimated_values,
-            lens_unknown,
             without_guides,
         )
 
@@ -134,15 +134,10 @@ class EstimateFrames:
         elif self.own.get("cx") not in (None, ""):
             view = view_from_values({**values, "focal": 1.0}, "options")
             principal_point = (view.cx, view.cy)
-        estimate = estimate_pose(frame.pixels, camera, principal_point=principal_point,
-                                 wall=self.options.wall)
-        # an uncalibrated lens's bent edges mislead: a frame is checked as a photo is (no
-        # camera, or a focal length given alone), whatever the check costs
-        if lens_unknown(camera, source, self.own):
-            from ..api.lens_lines import checked_for_a_lens
-
-            estimate = checked_for_a_lens(frame.pixels, estimate, principal_point,
-                                          self.options.min_confidence, camera=camera)
+        # as a photo is: checked for a lens where none is known (no camera, or a focal
+        # length given alone), whatever the check costs
+        estimate = estimate_as_given(frame.pixels, camera, source, self.own, principal_point,
+                                     self.options)
         row = estimate_row(estimate, source)
         try:
             checked(estimate, self.options)
