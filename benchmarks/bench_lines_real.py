@@ -13,7 +13,16 @@ Issue 23's goal on the held-back half: recall >= 0.75, precision >= 0.55 (vertic
 ... --format csv``) and scores its output, and checks the labels' map against the reported
 lines' source ends (:func:`lines_measure.map_check_px`).
 
+``--detector`` scores another of OpenCV's line detectors on the same frontal views, each at
+its defaults, keeping its segments of :data:`OTHER_MIN_LENGTH` px and more with both ends
+on pixels the photo shows: ``lsd`` (the line segment detector the pose estimate uses),
+``edlines`` (EDLines, ``cv2.ximgproc.EdgeDrawing``) and ``fld`` (the fast line detector,
+``cv2.ximgproc.FastLineDetector``). The last two are in ``opencv-contrib-python-headless``,
+which replaces gsrwt's ``opencv-python-headless`` (same version): install it in a venv of its
+own.
+
     python benchmarks/bench_lines_real.py [YORK_DIR] [--per-image] [--cli]
+    python benchmarks/bench_lines_real.py [YORK_DIR] --detector {lsd,edlines,fld}
 """
 
 from __future__ import annotations
@@ -29,6 +38,7 @@ from pathlib import Path
 from types import SimpleNamespace
 
 import cv2
+import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
@@ -36,14 +46,49 @@ import lines_measure  # noqa: E402
 
 from gsrwt_cli.batch.canonical_views import CanonicalView  # noqa: E402
 from gsrwt_cli.vision.edges import grey8  # noqa: E402
-from gsrwt_cli.vision.frontal_pixels import frontal_edges  # noqa: E402
+from gsrwt_cli.vision.frontal_pixels import frontal_edges, seen  # noqa: E402
 from gsrwt_cli.vision.hough import hough_lines  # noqa: E402
+
+#: The shortest segment kept of the other detectors (px in the frontal view).
+OTHER_MIN_LENGTH = 30.0
 
 
 def lines_in_process(view: CanonicalView) -> list:
     """What ``gsrwt lines`` at its defaults finds on ``view`` (its edge and Hough stages)."""
     edges = frontal_edges(grey8(view.pixels), view.pixel_map, view.source_size)
     return hough_lines(view.pixels, edges=edges)
+
+
+def other_detector(name: str):
+    """``find_lines(view)`` with OpenCV's detector ``name`` at its defaults (module docstring),
+    or exit with a line saying what to install."""
+    if name != "lsd" and not hasattr(cv2, "ximgproc"):
+        sys.exit(f"--detector {name}: needs cv2.ximgproc; install opencv-contrib-python-headless "
+                 f"{cv2.__version__} in place of opencv-python-headless, in a venv of its own")
+
+    def detect(grey: np.ndarray) -> np.ndarray | None:
+        if name == "lsd":
+            return cv2.createLineSegmentDetector(cv2.LSD_REFINE_STD).detect(grey)[0]
+        if name == "fld":
+            return cv2.ximgproc.createFastLineDetector().detect(grey)
+        drawing = cv2.ximgproc.createEdgeDrawing()
+        drawing.detectEdges(grey)
+        return drawing.detectLines()
+
+    def find_lines(view: CanonicalView) -> list[SimpleNamespace]:
+        found = detect(grey8(view.pixels))
+        if found is None:
+            return []
+        ends = found.reshape(-1, 4).astype(np.float64)
+        shown = seen(view.pixel_map, view.source_size)
+        height, width = shown.shape
+        cols = np.clip(np.rint(ends[:, [0, 2]]).astype(int), 0, width - 1)
+        rows = np.clip(np.rint(ends[:, [1, 3]]).astype(int), 0, height - 1)
+        keep = (np.hypot(ends[:, 2] - ends[:, 0], ends[:, 3] - ends[:, 1]) >= OTHER_MIN_LENGTH) \
+            & shown[rows, cols].all(axis=1)
+        return [SimpleNamespace(x1=x1, y1=y1, x2=x2, y2=y2) for x1, y1, x2, y2 in ends[keep]]
+
+    return find_lines
 
 
 def lines_of_cli(root: Path, sidecar: Path) -> dict[str, list[SimpleNamespace]]:
@@ -66,6 +111,8 @@ def main() -> None:
     parser.add_argument("--per-image", action="store_true", help="a row per photo")
     parser.add_argument("--cli", action="store_true",
                         help="score one real run of gsrwt lines instead (no timing)")
+    parser.add_argument("--detector", choices=("lsd", "edlines", "fld"),
+                        help="score another of OpenCV's line detectors instead")
     args = parser.parse_args()
     if not (args.root / "truth.csv").is_file():
         sys.exit(f"{args.root}: no truth.csv (give the York Urban folder)")
@@ -82,7 +129,9 @@ def main() -> None:
                                                   lambda view: found.get(view.path.name, [])))
             print(f"labels' map against the lines' own source ends: {worst_map:.2g} px at worst")
         else:
-            measured = list(lines_measure.measure(args.root, sidecar, lines_in_process))
+            find_lines = lines_in_process if args.detector is None else \
+                other_detector(args.detector)
+            measured = list(lines_measure.measure(args.root, sidecar, find_lines))
     if args.per_image:
         print(f"{'image':14} {'recall':>11} {'vertical':>11} {'all':>11}")
         for item in measured:
@@ -90,7 +139,8 @@ def main() -> None:
             print(f"{item.name:14} {s.found:4}/{s.long_vertical:<4}  {s.vertical_on_labels:4}/"
                   f"{s.vertical_lines:<4}  {s.on_labels:4}/{s.lines:<4}")
     total = lines_measure.total(measured)
-    print(f"York Urban ({args.root.name}): {len(measured)} photos, "
+    print(f"{args.detector or 'gsrwt lines'} on York Urban ({args.root.name}): "
+          f"{len(measured)} photos, "
           f"{total.long_vertical} long vertical labels")
     print(f"recall (long verticals)  {total.recall:.3f}  ({total.found}/{total.long_vertical})")
     print(f"precision vertical       {total.vertical_precision:.3f}  "
