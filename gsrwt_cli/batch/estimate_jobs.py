@@ -47,6 +47,7 @@ from ..inputs.records import (
     GSRWT_FIELDS,
     POSE_FIELDS,
     SENSOR_FIELDS,
+    RecordError,
     guided_view_values,
     view_from_values,
 )
@@ -334,6 +335,11 @@ def guided_row(path: Path, values: Mapping[str, Any], where: str, orientation: i
     return row
 
 
+#: How a pose the corners ``--auto document`` found cannot give begins: the user gave no
+#: corners, so the reason is not said of a field of theirs.
+DOCUMENT_NO_POSE = "the document's corners give no pose"
+
+
 def document_values(path: Path, values: Mapping[str, Any], where: str,
                     options: EstimateOptions, image: np.ndarray | None = None
                     ) -> dict[str, Any]:
@@ -364,7 +370,7 @@ def document_values(path: Path, values: Mapping[str, Any], where: str,
             fit = guided_pose({"corners": own["corners"], "aspect": own.get("aspect")},
                               camera, None)
         except GuideError as error:
-            raise EstimateError(f"the document's corners give no pose: {error}") from None
+            raise EstimateError(f"{DOCUMENT_NO_POSE}: {error}") from None
         if fit.rms_px > MAX_DOCUMENT_RMS_PX:
             raise EstimateError(
                 f"the largest quadrilateral is no rectangle seen by this camera: the best "
@@ -437,11 +443,17 @@ def process_estimate(job: EstimateJob, options: EstimateOptions,
                 raise EstimateError(job.error)
             if has_guides(job.values) or options.mode == "document":
                 values = job.values
-                if not has_guides(values):
+                found = not has_guides(values)
+                if found:
                     values = _found_document(job, options, picture_root)
                     row["corners"] = values["corners"]
-                row.update(guided_row(job.source, values, job.where,
-                                      orientation_of(job.source, options)), status="ok")
+                try:
+                    row.update(guided_row(job.source, values, job.where,
+                                          orientation_of(job.source, options)), status="ok")
+                except RecordError as error:
+                    if found and error.field == "corners":
+                        raise EstimateError(f"{DOCUMENT_NO_POSE}: {error.reason}") from None
+                    raise
                 return row
             estimate, camera, source, image, lens = estimate_file(job.source, job.values,
                                                                   job.where, options)

@@ -12,6 +12,7 @@ import cv2
 import numpy as np
 import pytest
 
+from gsrwt_cli.inputs.guides import parse_corners
 from tests.helpers.cli import run_gsrwt
 from tests.helpers.paths import DATA, ROOT, SAMPLE_VIEWS
 from tests.helpers.rectangles import RectangleShot, rectangle_shot
@@ -438,6 +439,27 @@ def test_auto_document_refuses_a_quadrilateral_no_rectangle_makes(tmp_path):
     unknown = run_gsrwt("estimate", tmp_path / "bent.png", "--auto", "document", "--aspect",
                         "0.75", "-f", "csv")
     assert rows(unknown.stdout)[0]["status"] == "ok", unknown.stdout
+
+
+def test_auto_document_says_a_frontal_page_gives_no_focal_length(tmp_path):
+    """A page seen about frontally, with no focal length anywhere (a PNG has no EXIF): its
+    corners cannot tell the focal length, and both commands say so of the document found,
+    not of a field 'corners' the user never wrote."""
+    from tests.helpers.pages import render_page
+
+    frontal = rectangle_shot(1.0, -2.0, 0.5, 900.0, 0.75, size=0.7)
+    cv2.imwrite(str(tmp_path / "frontal.png"), render_page(frontal, "fruits.jpg"))
+    reason = "the document's corners give no pose: the view is too frontal to tell the focal "
+    estimated = run_gsrwt("estimate", tmp_path / "frontal.png", "--auto", "document", "-f", "csv")
+    assert estimated.returncode == 1
+    [row] = rows(estimated.stdout)
+    assert row["error"].startswith(reason) and row["error"].endswith("give --focal or --aspect")
+    assert np.abs(np.array(parse_corners(row["corners"])) - frontal.corners).max() < 1.0
+    rectified = run_gsrwt("rectify", tmp_path / "frontal.png", "--auto", "document", "-o",
+                          tmp_path / "out")
+    assert rectified.returncode == 1
+    assert f"frontal.png: {reason}" in rectified.stderr and "field" not in rectified.stderr
+    assert sorted(path.name for path in (tmp_path / "out").iterdir()) == ["gsrwt.csv"]
 
 
 YORK = ROOT.parent / "shared" / "data" / "york-urban-train"
