@@ -56,7 +56,6 @@ from ..geometry.framing import (
     OutputTooLargeError,
 )
 from ..imaging.images import (
-    ImageError,
     ImageFormatError,
     canonical_extension,
     check_writable,
@@ -711,8 +710,6 @@ def settings_from_options(outdir: Path | Location, options: dict[str, Any],
             check_writable(extension, "uint8", 4 if alpha else 3)
         except ImageFormatError as error:
             raise click.BadParameter(error.reason, param_hint="'--ext'") from None
-        except ImageError as error:
-            raise click.BadParameter(str(error).split(";")[0], param_hint="'--ext'") from None
     settings = Settings(
         framing=Framing(bbox=bbox, scale=scale or 1.0, px_per_unit=px_per_unit,
                         max_stretch=max_stretch,

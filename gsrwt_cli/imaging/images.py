@@ -88,12 +88,14 @@ class ImageError(Exception):
 
 
 class ImageFormatError(ImageError):
-    """A file format that cannot hold an image: ``reason`` says why, ``alternatives`` lists
-    the formats (extensions without the dot) that could."""
+    """A file format that cannot hold an image (``what``: which images; None: a format gsrwt
+    does not write at all): ``reason`` says why, ``alternatives`` lists the formats
+    (extensions without the dot) that could."""
 
-    def __init__(self, extension: str, what: str, alternatives: list[str]) -> None:
+    def __init__(self, extension: str, what: str | None, alternatives: list[str]) -> None:
         self.extension, self.alternatives = extension, alternatives
-        self.reason = f"{extension} cannot store {what}"
+        self.reason = (f"cannot write '{extension}' files" if what is None
+                       else f"{extension} cannot store {what}")
         advice = (f"formats that can: {', '.join(alternatives)}" if alternatives
                   else "no output format gsrwt writes can hold them")
         super().__init__(f"{self.reason}; {advice}")
@@ -125,9 +127,14 @@ def check_writable(
     The message names the formats that can hold the image, or says that none can.
     """
     ext = canonical_extension(extension)
-    if ext not in _WRITABLE:
-        raise ImageError(f"cannot write '{extension}' files; use one of {', '.join(_WRITABLE)}")
     dtype_name = np.dtype(dtype).name
+    alternatives = [
+        other.lstrip(".") for other, (other_dtypes, other_channels) in _WRITABLE.items()
+        if other != ext and dtype_name in other_dtypes and channels in other_channels
+        and (size is None or max(size) <= _MAX_SIDE[other])
+    ]
+    if ext not in _WRITABLE:
+        raise ImageFormatError(extension, None, alternatives)
     dtypes, channel_counts = _WRITABLE[ext]
     what = None
     if dtype_name not in dtypes:
@@ -137,13 +144,8 @@ def check_writable(
     elif size is not None and max(size) > _MAX_SIDE[ext]:
         what = (f"images over {_MAX_SIDE[ext]} pixels wide or high (this one is "
                 f"{size[0]}x{size[1]})")
-    if what is None:
-        return
-    raise ImageFormatError(ext, what, [
-        other.lstrip(".") for other, (other_dtypes, other_channels) in _WRITABLE.items()
-        if other != ext and dtype_name in other_dtypes and channels in other_channels
-        and (size is None or max(size) <= _MAX_SIDE[other])
-    ])
+    if what is not None:
+        raise ImageFormatError(ext, what, alternatives)
 
 
 # --------------------------------------------------------------------------------------------

@@ -527,6 +527,16 @@ def test_formats_that_cannot_hold_the_output_say_which_can(tmp_path):
                      "--dry-run")
     assert ".jpg cannot store images over 65535 pixels wide or high" in wide.stderr
     assert "use --ext png or --ext tif" in wide.stderr
+    # OpenCV reads a GIF, and gsrwt writes none: the input's format, kept by default, cannot be
+    # the output's, and the line says which --ext can (it said "use one of .jpg, ...", which
+    # named no option)
+    assert cv2.imwrite(str(tmp_path / "anim.gif"), smooth_texture(20, 30, 1))
+    gif = run_gsrwt("rectify", str(tmp_path / "anim.gif"), *POSE, "-o", str(tmp_path / "o3"))
+    assert gif.returncode == 1
+    assert gif.stderr.splitlines()[0].endswith(
+        "anim.gif: cannot write '.gif' files; use --ext jpg or --ext png or --ext tif or "
+        "--ext bmp or --ext webp")
+    assert sorted(path.name for path in (tmp_path / "o3").iterdir()) == ["gsrwt.csv"]
 
 
 # --------------------------------------------------------------------------------------------
