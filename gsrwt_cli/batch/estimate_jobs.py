@@ -443,15 +443,15 @@ def process_estimate(job: EstimateJob, options: EstimateOptions,
                 raise EstimateError(job.error)
             if has_guides(job.values) or options.mode == "document":
                 values = job.values
-                found = not has_guides(values)
-                if found:
+                corners_found = not has_guides(values)  # by --auto document, not given
+                if corners_found:
                     values = _found_document(job, options, picture_root)
                     row["corners"] = values["corners"]
                 try:
                     row.update(guided_row(job.source, values, job.where,
                                           orientation_of(job.source, options)), status="ok")
                 except RecordError as error:
-                    if found and error.field == "corners":
+                    if corners_found and error.field == "corners":
                         raise EstimateError(f"{DOCUMENT_NO_POSE}: {error.reason}") from None
                     raise
                 return row

@@ -226,7 +226,8 @@ def _view(job: Job, estimate: bool = True, orientation: int | None = None,
         return (view_from_values(values, job.where, orientation or 1), source, columns,
                 None if corners in (None, "") else str(corners))
     except RecordError as error:
-        if job.pose_source == "estimated" and error.field == "corners":  # --auto document's
+        # an estimated pose reaches here only by --auto document, whose corners nobody gave
+        if job.pose_source == "estimated" and error.field == "corners":
             from .estimate_jobs import DOCUMENT_NO_POSE
 
             raise JobError(f"{DOCUMENT_NO_POSE}: {error.reason}") from None
