@@ -136,8 +136,10 @@ def load_pose_log(path: str | Path) -> PoseLog:
     suffix = path.suffix.lower()
     name = display_path(path)
     if suffix not in (".csv", ".tsv", ".txt", ".yaml", ".yml"):
-        if not path.is_file():
+        if not path.exists():
             raise PoseLogError(f"{name}: no such file")
+        if path.is_dir():
+            raise PoseLogError(f"{name}: is a directory, not a pose file")
         raise PoseLogError(f"{name}: unknown pose file type {quote(suffix)} (use .csv, .tsv "
                            "or .yaml)")
     text = read_sidecar_text(path)

@@ -73,3 +73,10 @@ def test_yaml_faults(tmp_path: Path) -> None:
         load_pose_log(write(tmp_path, "p.yaml", "time: 3\n"))
     with pytest.raises(PoseLogError, match="unknown pose file type"):
         load_pose_log(write(tmp_path, "p.json", "[]"))
+    # what is wrong with a path that is no pose file: missing, a folder, a device
+    with pytest.raises(PoseLogError, match="none: no such file$"):
+        load_pose_log(tmp_path / "none")
+    with pytest.raises(PoseLogError, match=": is a directory, not a pose file$"):
+        load_pose_log(tmp_path)
+    with pytest.raises(PoseLogError, match="unknown pose file type ''"):
+        load_pose_log("/dev/null")  # it exists: it was called "no such file"
