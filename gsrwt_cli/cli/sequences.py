@@ -16,7 +16,7 @@ import os
 import sys
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
-from pathlib import Path
+from pathlib import Path, PurePath
 from typing import Any
 
 import click
@@ -25,6 +25,7 @@ import numpy as np
 from ..base.messages import quote
 from ..batch.frame_sequences import SequenceFrame, frame_canonical_view, sequence_frames
 from ..batch.sequence_workers import FrameWork, rows_in_order
+from ..inputs.bags import BAG_EXTENSIONS
 from ..inputs.pose_log import PoseLog, load_pose_log
 from ..inputs.sidecar import SidecarError
 from ..inputs.videos import VIDEO_EXTENSIONS, VideoError, import_av, is_video_name
@@ -35,8 +36,16 @@ Row = dict[str, Any]
 
 def video_input(inputs: Iterable[object]) -> str | None:
     """The video among the INPUTs (by its extension, :data:`VIDEO_EXTENSIONS`), or None when
-    none is one; a usage error when a video is not the only INPUT."""
+    none is one; a usage error when a video is not the only INPUT, or when an INPUT is a ROS
+    bag's file (:data:`~gsrwt_cli.inputs.bags.BAG_EXTENSIONS`), which only ``gsrwt rectify``
+    reads. (A folder stays a folder of images here, whatever else it holds.)"""
     names = [str(name) for name in inputs]
+    bags = [name for name in names
+            if name != "-" and PurePath(name).suffix.lower() in BAG_EXTENSIONS]
+    if bags:
+        raise click.UsageError(
+            f"{bags[0]}: {click.get_current_context().command_path} reads no ROS bags; gsrwt "
+            f"rectify does, their poses from --pose-topic or --poses")
     videos = [name for name in names if name != "-" and is_video_name(name)]
     if not videos:
         return None

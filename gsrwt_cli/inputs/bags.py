@@ -326,12 +326,16 @@ def bag_topics(bag: str | Path) -> dict[str, str]:
     return dict(sorted(topics.items()))
 
 
+#: The file names of bags (a ROS 2 bag may also be the directory of its ``metadata.yaml``).
+BAG_EXTENSIONS = (".bag", ".mcap", ".db3")
+
+
 def is_bag_name(path: str | Path) -> bool:
     """Whether ``path`` names a bag: a ``.bag``, ``.mcap`` or ``.db3`` file, or a directory
     holding a ROS 2 bag's ``metadata.yaml`` (a directory that cannot be read is not known
     to be one: it is left to the reading of directories to report)."""
     path = Path(path)
-    if path.suffix.lower() in (".bag", ".mcap", ".db3"):
+    if path.suffix.lower() in BAG_EXTENSIONS:
         return True
     try:
         return path.is_dir() and (path / "metadata.yaml").is_file()

@@ -136,6 +136,8 @@ class VideoReader:
         except FileNotFoundError:
             raise VideoError("no such file") from None
         except (av.FFmpegError, OSError, ValueError) as error:
+            if self.path.is_file() and self.path.stat().st_size == 0:
+                raise VideoError("empty file") from None  # as an image's
             raise VideoError(f"not a video FFmpeg can read ({_reason(error)})") from None
         streams = self.container.streams.video
         if not streams:

@@ -401,6 +401,22 @@ def test_bad_requests_are_one_line(tmp_path: Path, renders) -> None:
     assert video.returncode == 2 and "--codec" in video.stderr
 
 
+def test_commands_that_read_no_bags_say_so(tmp_path: Path, renders) -> None:
+    """A real bag given to a command other than rectify: a usage error naming the bag and the
+    command that reads it (it was read as an image, 'not an image gsrwt can decode')."""
+    bag = bag_path(tmp_path, "ros1")
+    _write_bag(bag, "ros1", renders, tf=True)
+    for args in (("estimate", bag, "--focal", "500"), ("lines", bag),
+                 ("match", bag, "--template", bag.with_suffix(".png")),
+                 ("params", bag, "--poses", tmp_path / "p.csv", "--focal", "500")):
+        result = run_gsrwt(*args)
+        assert result.returncode == 2, (args, result.stderr)
+        assert result.stderr.splitlines()[-1] == (
+            f"Error: {bag}: gsrwt {args[0]} reads no ROS bags; gsrwt rectify does, their poses "
+            f"from --pose-topic or --poses"), result.stderr
+    assert sorted(path.name for path in tmp_path.iterdir()) == [bag.name]
+
+
 def test_a_bag_without_rosbags_says_how_to_install_it(tmp_path: Path, renders) -> None:
     """rosbags absent (a package of that name that cannot be imported, first on the path):
     one line saying how to install the extra."""

@@ -74,6 +74,9 @@ def test_what_is_not_a_video(tmp_path: Path) -> None:
         VideoReader(tmp_path / "a.mp4")
     with pytest.raises(VideoError, match="no such file"):
         VideoReader(tmp_path / "missing.mp4")
+    (tmp_path / "empty.mp4").write_bytes(b"")  # said as an image's is, not as FFmpeg's data
+    with pytest.raises(VideoError, match="^empty file$"):
+        VideoReader(tmp_path / "empty.mp4")
     assert is_video_name("A.MKV") and not is_video_name("a.png")
 
 
