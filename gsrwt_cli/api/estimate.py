@@ -195,15 +195,15 @@ WALL_CHOICES = ("frontal", "dominant")
 #: Names of the three directions, in the order of :attr:`PoseEstimate.vanishing_points`.
 DIRECTION_NAMES = ("vertical", "wall", "normal")
 
-#: How a refusal ends where guides would settle the pose: a photo takes them, a video's frames
-#: do not (:func:`gsrwt_cli.batch.estimate_jobs.without_guides`).
-GUIDES_REMEDY = ", or guides (--verticals)"
-
-
-def remedy(focal_estimated: bool = False) -> str:
+def remedy(focal_estimated: bool = False, guides: bool = True) -> str:
     """How a refusal ends: what would settle the pose (the focal length first where it was
-    estimated, whose uncertainty is then one of the reasons)."""
-    return f"give {'the focal length, ' if focal_estimated else ''}the pose{GUIDES_REMEDY}"
+    estimated, whose uncertainty is then one of the reasons; guides where the input takes
+    them: a photo does, a video's frames do not,
+    :func:`gsrwt_cli.batch.estimate_jobs.without_guides`)."""
+    if guides:
+        return f"give {'the focal length, ' if focal_estimated else ''}the pose, or guides " \
+               f"(--verticals)"
+    return f"give {'the focal length or ' if focal_estimated else ''}the pose"
 
 
 @dataclass(frozen=True)

@@ -22,7 +22,6 @@ from ..api.estimate import (
     DEFAULT_MIN_CONFIDENCE,
     DIRECTION_NAMES,
     EXIF_FOCAL_SPREAD,
-    GUIDES_REMEDY,
     WALL_CHOICES,
     EstimateError,
     PoseEstimate,
@@ -255,10 +254,11 @@ def without_guides(reason: str) -> str:
     """A refusal's ``reason`` for a frame of a video or a bag, which takes no guides: the
     remedy ends at the focal length or the pose (``gsrwt estimate VIDEO --verticals`` is a
     usage error)."""
-    if not reason.endswith(GUIDES_REMEDY):
-        return reason
-    return reason[:-len(GUIDES_REMEDY)].replace("give the focal length, the pose",
-                                                 "give the focal length or the pose")
+    for focal_estimated in (True, False):
+        offered = remedy(focal_estimated)
+        if reason.endswith(offered):
+            return reason[:-len(offered)] + remedy(focal_estimated, guides=False)
+    return reason
 
 
 def estimated_values(estimate: PoseEstimate, camera: Intrinsics | None, width: int,
@@ -338,6 +338,12 @@ def guided_row(path: Path, values: Mapping[str, Any], where: str, orientation: i
 #: How a pose the corners ``--auto document`` found cannot give begins: the user gave no
 #: corners, so the reason is not said of a field of theirs.
 DOCUMENT_NO_POSE = "the document's corners give no pose"
+
+
+def found_corners_reason(error: RecordError) -> str | None:
+    """The reason of a guide's error on the corners ``--auto document`` found, said of the
+    document (the user gave no corners); None for another field's."""
+    return f"{DOCUMENT_NO_POSE}: {error.reason}" if error.field == "corners" else None
 
 
 def document_values(path: Path, values: Mapping[str, Any], where: str,
@@ -451,9 +457,10 @@ def process_estimate(job: EstimateJob, options: EstimateOptions,
                     row.update(guided_row(job.source, values, job.where,
                                           orientation_of(job.source, options)), status="ok")
                 except RecordError as error:
-                    if corners_found and error.field == "corners":
-                        raise EstimateError(f"{DOCUMENT_NO_POSE}: {error.reason}") from None
-                    raise
+                    reason = found_corners_reason(error) if corners_found else None
+                    if reason is None:
+                        raise
+                    raise EstimateError(reason) from None
                 return row
             estimate, camera, source, image, lens = estimate_file(job.source, job.values,
                                                                   job.where, options)

@@ -226,12 +226,12 @@ def _view(job: Job, estimate: bool = True, orientation: int | None = None,
         return (view_from_values(values, job.where, orientation or 1), source, columns,
                 None if corners in (None, "") else str(corners))
     except RecordError as error:
-        # an estimated pose reaches here only by --auto document, whose corners nobody gave
-        if job.pose_source == "estimated" and error.field == "corners":
-            from .estimate_jobs import DOCUMENT_NO_POSE
+        reason = None
+        if job.pose_source == "estimated":  # only by --auto document here: corners it found
+            from .estimate_jobs import found_corners_reason
 
-            raise JobError(f"{DOCUMENT_NO_POSE}: {error.reason}") from None
-        raise JobError(str(error)) from None
+            reason = found_corners_reason(error)
+        raise JobError(reason or str(error)) from None
 
 
 def _lens_from_lines(job: Job, values: dict[str, Any], orientation: int,
